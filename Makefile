@@ -1,0 +1,39 @@
+# Every target sets up what it needs: .venv with the project installed, and Icarus Verilog
+# from the OS package manager when it is missing and we are allowed to install it.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+DATASET ?= ../shared/datasets/middlebury2003/teddy
+JOBS ?= 2
+
+.PHONY: all demo test bench icarus clean
+
+all: test
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/pip install -q --upgrade pip
+	$(VENV)/bin/pip install -q -e ".[test]"
+	touch $@
+
+icarus:
+	@command -v iverilog >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "Installing Icarus Verilog (apt-get)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq iverilog; \
+	  else \
+	    echo "iverilog not found and cannot install it here: install Icarus Verilog (e.g. 'sudo apt-get install iverilog')"; exit 2; \
+	  fi; }
+
+demo: $(STAMP) icarus
+	$(VENV)/bin/npstereo demo --out build/demo
+
+test: $(STAMP) icarus
+	$(PY) -m pytest -n $(JOBS) -q
+
+bench: $(STAMP) icarus
+	@for b in tests/bench_*.py; do $(PY) $$b --dataset "$(DATASET)" || exit $$?; done
+
+clean:
+	rm -rf build .pytest_cache

@@ -1,0 +1,88 @@
+"""Transformation: the four non-parametric transforms of the paper (Eq. 1, 2, 4, 6, 7, 8).
+
+Every transform looks at the B x B window around a pixel without its centre. Pixels outside
+the image are 0 (zero padding), exactly as the hardware masks window columns and rows that
+fall outside the frame. Neighbours are numbered n = 0 .. k-1 in raster order of the window
+(row by row, top to bottom, left to right), skipping the centre.
+"""
+
+import numpy as np
+
+__all__ = ["window_offsets", "neighbour_planes", "rank", "census", "ext_rank", "ext_census",
+           "transform"]
+
+
+def window_offsets(block):
+    """(dy, dx) of the k = B*B-1 neighbours in their numbering order."""
+    r = (block - 1) // 2
+    return [(dy, dx) for dy in range(-r, r + 1) for dx in range(-r, r + 1) if (dy, dx) != (0, 0)]
+
+
+def neighbour_planes(image, block):
+    """Yield (n, P'_n) for every neighbour: the image shifted so that P'_n(y, x) = P(y+dy, x+dx)."""
+    image = np.asarray(image, dtype=np.uint8)
+    r = (block - 1) // 2
+    height, width = image.shape
+    padded = np.zeros((height + 2 * r, width + 2 * r), dtype=np.uint8)
+    padded[r:r + height, r:r + width] = image
+    for n, (dy, dx) in enumerate(window_offsets(block)):
+        yield n, padded[r + dy:r + dy + height, r + dx:r + dx + width]
+
+
+def _xi(centre, neighbour):
+    """Eq. 1: 1 where the centre is strictly brighter than the neighbour."""
+    return centre > neighbour
+
+
+def _absolute_difference(centre, neighbour):
+    """Eq. 6: |P - P'| on 8-bit pixels, without leaving uint8."""
+    return np.maximum(centre, neighbour) - np.minimum(centre, neighbour)
+
+
+def rank(image, block):
+    """Eq. 2: number of neighbours darker than the centre. (H, W) uint16."""
+    image = np.asarray(image, dtype=np.uint8)
+    out = np.zeros(image.shape, dtype=np.uint16)
+    for _, plane in neighbour_planes(image, block):
+        out += _xi(image, plane)
+    return out
+
+
+def census(image, block):
+    """Eq. 4: bit vector of the same comparisons.
+
+    Returns (ceil(k/64), H, W) uint64: bit b of word w is neighbour 64*w + b.
+    """
+    image = np.asarray(image, dtype=np.uint8)
+    k = block * block - 1
+    words = np.zeros(((k + 63) // 64,) + image.shape, dtype=np.uint64)
+    for n, plane in neighbour_planes(image, block):
+        words[n // 64] |= _xi(image, plane).astype(np.uint64) << np.uint64(n % 64)
+    return words
+
+
+def ext_rank(image, block):
+    """Eq. 7: sum of |P - P'| over the neighbours. (H, W) uint32."""
+    image = np.asarray(image, dtype=np.uint8)
+    out = np.zeros(image.shape, dtype=np.uint32)
+    for _, plane in neighbour_planes(image, block):
+        out += _absolute_difference(image, plane)
+    return out
+
+
+def ext_census(image, block):
+    """Eq. 8: the vector of |P - P'|, one byte per neighbour. (k, H, W) uint8."""
+    image = np.asarray(image, dtype=np.uint8)
+    k = block * block - 1
+    out = np.empty((k,) + image.shape, dtype=np.uint8)
+    for n, plane in neighbour_planes(image, block):
+        out[n] = _absolute_difference(image, plane)
+    return out
+
+
+_TRANSFORMS = {"rank": rank, "census": census, "ext-rank": ext_rank, "ext-census": ext_census}
+
+
+def transform(image, params):
+    """The transform ``params.transform`` of an 8-bit gray image."""
+    return _TRANSFORMS[params.transform](image, params.block)
