@@ -1,0 +1,82 @@
+"""Matching cost in hardware: the cost of one left/right pair of transformed pixels.
+
+Mirrors :mod:`npstereo.golden.matching_cost` (Eq. 3, 5, 9): ``_rank_cost`` (rank and
+extended rank: |TL - TR|), ``_census_cost`` (popcount of TL xor TR) and ``_ext_census_cost``
+(sum over the bytes of |TL_n - TR_n|). Masking of pairs outside the image (cost 0) is the
+caller's business, as in the golden model where it happens outside these functions.
+"""
+
+from amaranth.hdl import Module, unsigned
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .transform import absolute_difference
+from .trees import DEFAULT_EVERY, build_popcount, build_sum, build_tree, popcount_plan, \
+    register_plan
+
+__all__ = ["MatchingCost"]
+
+
+class MatchingCost(wiring.Component):
+    """Cost of the transformed pair (``left``, ``right``), one pair per ``en``-high clock.
+
+    Parameters
+    ----------
+    params : StereoParams
+        Transform and block size (for the widths).
+    every : int
+        Register spacing in levels of logic (see :mod:`.trees`); 0 for a combinational
+        cost (latency 0).
+
+    Attributes
+    ----------
+    left, right : In(unsigned(params.transform_bits))
+    en : In(1)
+        Advances the pipeline registers.
+    cost : Out(unsigned(params.cost_bits))
+    latency : int
+        Register stages between (``left``, ``right``) and ``cost``.
+    """
+
+    def __init__(self, params, every=DEFAULT_EVERY):
+        self.params, self.every = params, every
+        self._cost, self.latency = {
+            "rank": (self._rank_cost, self._single_stage_latency()),
+            "ext-rank": (self._rank_cost, self._single_stage_latency()),
+            "census": (self._census_cost,
+                       sum(popcount_plan(params.neighbours, every, 0, every > 0))),
+            "ext-census": (self._ext_census_cost,
+                           sum(register_plan(params.neighbours, every, 1, every > 0))),
+        }[params.transform]
+        super().__init__({
+            "left": In(unsigned(params.transform_bits)),
+            "right": In(unsigned(params.transform_bits)),
+            "en": In(1),
+            "cost": Out(unsigned(params.cost_bits)),
+        })
+
+    def _single_stage_latency(self):
+        return sum(register_plan(1, self.every, 1, self.every > 0))
+
+    def _rank_cost(self, m):
+        plan = register_plan(1, self.every, 1, self.every > 0)
+        value = absolute_difference(self.left, self.right)
+        return build_tree(m, self.en, [(value,)], None, plan)[0]
+
+    def _census_cost(self, m):
+        differing = self.left ^ self.right
+        bits = [differing[n] for n in range(self.params.neighbours)]
+        # One LUT level in front of the compressors, far shorter than an adder level: not
+        # counted against the register spacing.
+        return build_popcount(m, self.en, bits, self.every, 0, self.every > 0)
+
+    def _ext_census_cost(self, m):
+        differences = [absolute_difference(self.left.word_select(n, 8),
+                                           self.right.word_select(n, 8))
+                       for n in range(self.params.neighbours)]
+        return build_sum(m, self.en, differences, self.every, 1, self.every > 0)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.d.comb += self.cost.eq(self._cost(m))
+        return m
