@@ -1,0 +1,377 @@
+"""The HDL datapath units against the golden model, in the Amaranth simulator.
+
+Every unit gets a stream of random inputs with ``en`` toggling randomly (garbage on the
+inputs while ``en`` is low, which the pipeline must ignore) and every output is compared,
+``latency`` ``en``-high clocks later, with the golden model. The ``test_broken_*`` cases
+monkeypatch a deliberately wrong primitive into the hardware and assert that the same check
+catches it.
+"""
+
+import random
+
+import numpy as np
+import pytest
+from amaranth.hdl import Fragment
+from amaranth.sim import Simulator
+
+from npstereo.golden import matching_cost as golden_cost
+from npstereo.golden import transform as golden_transform
+from npstereo.golden.params import TRANSFORMS, StereoParams
+from npstereo.hdl import matching_cost as hdl_cost
+from npstereo.hdl import transform as hdl_transform
+from npstereo.hdl import trees
+from npstereo.hdl.matching_cost import MatchingCost
+from npstereo.hdl.transform import Transform
+from npstereo.hdl.trees import AdderTree, MinTree, PopCount
+
+
+def run_stream(dut, inputs, apply, read, expected, seed, en_probability=0.6, garbage=None):
+    """Drive ``inputs`` through ``dut`` with a random ``en``; return the mismatches.
+
+    Parameters
+    ----------
+    dut : Component
+        Has ``en`` and ``latency``.
+    inputs : list
+        One item per ``en``-high clock.
+    apply : callable
+        ``apply(ctx, item)`` sets the input ports.
+    read : callable
+        ``read(ctx)`` returns the output as a comparable value.
+    expected : list
+        Golden output of each item.
+    seed : int
+    en_probability : float
+        Chance of ``en`` being high in a clock.
+    garbage : callable, optional
+        ``garbage(rng)`` makes an input presented while ``en`` is low.
+
+    Returns
+    -------
+    (int, list)
+        Number of comparisons made and the (input index, got, expected) mismatches.
+    """
+    latency = dut.latency
+    result = {"checks": 0, "mismatches": []}
+
+    def check(ctx, index):
+        got = read(ctx)
+        result["checks"] += 1
+        if got != expected[index]:
+            result["mismatches"].append((index, got, expected[index]))
+
+    async def testbench(ctx):
+        rng = random.Random(seed)
+        taken = 0
+        while taken < len(inputs) + latency:
+            en = rng.random() < en_probability
+            if en and taken < len(inputs):
+                apply(ctx, inputs[taken])
+            elif garbage is not None:
+                apply(ctx, garbage(rng))
+            ctx.set(dut.en, en)
+            if latency == 0 and en and taken < len(inputs):
+                check(ctx, taken)
+            await advance(ctx)
+            taken += en
+            if latency > 0 and latency <= taken < len(inputs) + latency:
+                check(ctx, taken - latency)
+
+    sim = Simulator(dut)
+    if latency > 0:
+        sim.add_clock(1e-6)
+        advance = ctx_tick
+    else:
+        # A combinational unit (every = 0) has no clock domain to tick.
+        advance = ctx_delay
+    sim.add_testbench(testbench)
+    sim.run()
+    return result["checks"], result["mismatches"]
+
+
+async def ctx_tick(ctx):
+    await ctx.tick()
+
+
+async def ctx_delay(ctx):
+    await ctx.delay(1e-6)
+
+
+def assert_stream_matches(*args, **kwargs):
+    checks, mismatches = run_stream(*args, **kwargs)
+    assert checks >= len(args[1]), "the testbench compared fewer outputs than it sent inputs"
+    assert not mismatches, (f"{len(mismatches)} of {checks} outputs differ, first "
+                            f"(input, got, expected): {mismatches[0]}")
+
+
+# Transforms ------------------------------------------------------------------------------
+
+def random_windows(block, count, rng):
+    """Windows that stress the strict comparison: equal pixels, 0 and 255, ramps."""
+    size = block * block
+    windows = []
+    for i in range(count):
+        kind = i % 5
+        if kind == 0:
+            window = rng.integers(0, 256, size)
+        elif kind == 1:
+            # Few distinct levels around the centre: many ties with it.
+            levels = rng.integers(0, 256, 3)
+            window = rng.choice(levels, size)
+        elif kind == 2:
+            window = rng.choice(np.array([0, 1, 254, 255]), size)
+        elif kind == 3:
+            window = np.full(size, rng.choice([0, 255, int(rng.integers(0, 256))]))
+            window[rng.integers(0, size, 2)] = rng.integers(0, 256, 2)
+        else:
+            window = rng.integers(0, 256, size)
+            window[size // 2] = rng.choice([0, 255])
+        windows.append(window.astype(np.uint8))
+    return windows
+
+
+def golden_window_value(window, params):
+    """The golden transform of the window's centre pixel, packed as the hardware packs it."""
+    block, r = params.block, params.radius
+    image = window.reshape(block, block)
+    out = golden_transform.transform(image, params)
+    if params.transform == "census":
+        return sum(int(word) << (64 * w) for w, word in enumerate(out[:, r, r]))
+    if params.transform == "ext-census":
+        return sum(int(byte) << (8 * n) for n, byte in enumerate(out[:, r, r]))
+    return int(out[r, r])
+
+
+def pack_window(window):
+    return sum(int(p) << (8 * i) for i, p in enumerate(window))
+
+
+def check_transform(params, every, seed, count=100):
+    rng = np.random.default_rng(seed)
+    windows = random_windows(params.block, count, rng)
+    expected = [golden_window_value(w, params) for w in windows]
+    dut = Transform(params, every)
+    assert_stream_matches(
+        dut, windows,
+        lambda ctx, w: ctx.set(dut.window.as_value(), pack_window(w)),
+        lambda ctx: ctx.get(dut.value),
+        expected, seed,
+        garbage=lambda r: np.array([r.randrange(256) for _ in range(params.block ** 2)]))
+
+
+# (block, register spacing): every spacing, including combinational, and one large block.
+TRANSFORM_CASES = [(3, 2), (5, 1), (7, 0), (7, 3), (11, 2), (19, 2)]
+
+
+@pytest.mark.parametrize("transform", TRANSFORMS)
+@pytest.mark.parametrize("block,every", TRANSFORM_CASES)
+def test_transform_matches_golden(transform, block, every):
+    check_transform(StereoParams(transform=transform, block=block), every,
+                    seed=block * 10 + every)
+
+
+def test_transform_latency_grows_logarithmically():
+    units = [Transform(StereoParams(transform="rank", block=b)) for b in (3, 7, 19)]
+    for unit in units:
+        Fragment.get(unit, None)  # elaborates: the tree really has that many stages
+    latencies = [unit.latency for unit in units]
+    assert latencies == sorted(latencies) and latencies[-1] <= 6, latencies
+
+
+# Matching costs --------------------------------------------------------------------------
+
+def random_transformed(params, count, rng):
+    """Random transformed pixels in the legal range, with extremes and equal pairs."""
+    k = params.neighbours
+    top = {"rank": k, "ext-rank": 255 * k}.get(params.transform)
+    pairs = []
+    for i in range(count):
+        if params.transform in ("rank", "ext-rank"):
+            left, right = (int(v) for v in rng.integers(0, top + 1, 2))
+            if i % 4 == 1:
+                left, right = rng.permutation([0, top])
+            elif i % 4 == 2:
+                right = left
+        else:
+            if params.transform == "census":
+                bits = rng.integers(0, 2, (2, k))
+            else:
+                bits = rng.integers(0, 256, (2, k))
+                if i % 4 == 1:
+                    bits = np.stack([rng.choice([0, 255], k), rng.choice([0, 255], k)])
+            if i % 4 == 2:
+                bits[1] = bits[0]
+            if i % 4 == 3:
+                bits[1] = (255 if params.transform == "ext-census" else 1) - bits[0]
+            step = 1 if params.transform == "census" else 8
+            left, right = (sum(int(v) << (step * n) for n, v in enumerate(row)) for row in bits)
+        pairs.append((int(left), int(right)))
+    return pairs
+
+
+def golden_array(value, params):
+    """A transformed pixel as the golden model stores it, for a 1 x 1 image."""
+    k = params.neighbours
+    if params.transform == "census":
+        words = [(value >> (64 * w)) & (2 ** 64 - 1) for w in range((k + 63) // 64)]
+        return np.array(words, dtype=np.uint64).reshape(-1, 1, 1)
+    if params.transform == "ext-census":
+        return np.array([(value >> (8 * n)) & 255 for n in range(k)],
+                        dtype=np.uint8).reshape(-1, 1, 1)
+    return np.array([[value]], dtype=np.int64)
+
+
+def check_matching_cost(params, every, seed, count=100):
+    rng = np.random.default_rng(seed)
+    pairs = random_transformed(params, count, rng)
+    expected = [int(golden_cost.matching_costs(golden_array(a, params),
+                                               golden_array(b, params), 0, params)[0, 0])
+                for a, b in pairs]
+    dut = MatchingCost(params, every)
+
+    def apply(ctx, pair):
+        ctx.set(dut.left, pair[0])
+        ctx.set(dut.right, pair[1])
+
+    assert_stream_matches(
+        dut, pairs, apply, lambda ctx: ctx.get(dut.cost), expected, seed,
+        garbage=lambda r: (r.getrandbits(params.transform_bits),
+                           r.getrandbits(params.transform_bits)))
+
+
+@pytest.mark.parametrize("transform", TRANSFORMS)
+@pytest.mark.parametrize("block,every", TRANSFORM_CASES)
+def test_matching_cost_matches_golden(transform, block, every):
+    check_matching_cost(StereoParams(transform=transform, block=block), every,
+                        seed=block * 10 + every + 1)
+
+
+# Trees -----------------------------------------------------------------------------------
+
+def check_min_tree(count, width, every, seed, samples=40):
+    rng = np.random.default_rng(seed)
+    top = 2 ** width - 1
+    vectors = []
+    for i in range(samples):
+        if i % 3 == 0:
+            vector = rng.integers(0, 3, count)  # many ties
+        elif i % 3 == 1:
+            vector = rng.choice([0, top], count)
+        else:
+            vector = rng.integers(0, top + 1, count)
+        vectors.append([int(v) for v in vector])
+    expected = [(min(v), int(np.argmin(v))) for v in vectors]  # argmin: first minimum
+    dut = MinTree(count, width, every)
+
+    def apply(ctx, vector):
+        for i, v in enumerate(vector):
+            ctx.set(dut.values[i], v)
+
+    assert_stream_matches(
+        dut, vectors, apply, lambda ctx: (ctx.get(dut.min), ctx.get(dut.index)), expected,
+        seed, garbage=lambda r: [r.randrange(top + 1) for _ in range(count)])
+
+
+@pytest.mark.parametrize("count,width,every",
+                         [(1, 4, 2), (2, 3, 0), (3, 5, 1), (8, 6, 2), (13, 4, 3), (33, 12, 2)])
+def test_min_tree_matches_numpy_argmin(count, width, every):
+    check_min_tree(count, width, every, seed=count)
+
+
+def check_adder_tree(count, width, every, seed, samples=30):
+    rng = np.random.default_rng(seed)
+    top = 2 ** width - 1
+    vectors = [[int(v) for v in (rng.integers(0, top + 1, count) if i % 2
+                                 else np.full(count, top))] for i in range(samples)]
+    dut = AdderTree(count, width, every)
+
+    def apply(ctx, vector):
+        for i, v in enumerate(vector):
+            ctx.set(dut.inputs[i], v)
+
+    assert_stream_matches(dut, vectors, apply, lambda ctx: ctx.get(dut.sum),
+                          [sum(v) for v in vectors], seed,
+                          garbage=lambda r: [r.randrange(top + 1) for _ in range(count)])
+
+
+@pytest.mark.parametrize("count,width,every", [(1, 8, 1), (5, 8, 0), (17, 8, 2), (40, 3, 3)])
+def test_adder_tree_sums(count, width, every):
+    check_adder_tree(count, width, every, seed=count)
+
+
+def check_popcount(width, every, seed, samples=30):
+    rng = random.Random(seed)
+    vectors = [(2 ** width - 1) if i % 3 == 0 else rng.getrandbits(width)
+               for i in range(samples)]
+    dut = PopCount(width, every)
+    assert_stream_matches(dut, vectors, lambda ctx, v: ctx.set(dut.bits, v),
+                          lambda ctx: ctx.get(dut.count), [v.bit_count() for v in vectors],
+                          seed, garbage=lambda r: r.getrandbits(width))
+
+
+@pytest.mark.parametrize("width,every", [(1, 2), (2, 0), (4, 1), (24, 2), (80, 3), (360, 2)])
+def test_popcount_counts(width, every):
+    check_popcount(width, every, seed=width)
+
+
+# Deliberately broken variants must fail the same checks --------------------------------
+
+def test_broken_comparison_is_caught(monkeypatch):
+    monkeypatch.setattr(hdl_transform, "xi", lambda centre, neighbour: centre >= neighbour)
+    for transform in ("rank", "census"):
+        with pytest.raises(AssertionError, match="outputs differ"):
+            check_transform(StereoParams(transform=transform, block=3), 2, seed=1)
+
+
+def test_broken_absolute_difference_is_caught(monkeypatch):
+    def wrapping(a, b):
+        return (a - b)[:max(len(a), len(b))]
+
+    monkeypatch.setattr(hdl_transform, "absolute_difference", wrapping)
+    monkeypatch.setattr(hdl_cost, "absolute_difference", wrapping)
+    for transform in ("ext-rank", "ext-census"):
+        with pytest.raises(AssertionError, match="outputs differ"):
+            check_transform(StereoParams(transform=transform, block=3), 2, seed=2)
+    for transform in ("rank", "ext-census"):
+        with pytest.raises(AssertionError, match="outputs differ"):
+            check_matching_cost(StereoParams(transform=transform, block=3), 2, seed=3)
+
+
+def test_broken_min_tie_rule_is_caught(monkeypatch):
+    monkeypatch.setattr(trees, "_takes_upper", lambda lower, upper: upper <= lower)
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_min_tree(8, 4, 2, seed=4)
+
+
+def test_broken_popcount_compressor_is_caught(monkeypatch):
+    real = trees.full_adder_compress
+
+    def no_carry(bits):
+        return [c[0] for c in real(bits)]
+
+    monkeypatch.setattr(trees, "full_adder_compress", no_carry)
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_popcount(24, 2, seed=5)
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_matching_cost(StereoParams(transform="census", block=3), 2, seed=6)
+
+
+def test_broken_adder_width_is_caught(monkeypatch):
+    monkeypatch.setattr(trees, "_add", lambda lower, upper: (
+        (lower[0] + upper[0])[:max(len(lower[0]), len(upper[0]))],))
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_adder_tree(5, 8, 2, seed=7)
+
+
+def test_ignoring_enable_is_caught(monkeypatch):
+    def free_running(m, en, items, level):
+        regs = []
+        for item in items:
+            item_regs = tuple(trees.Signal(trees.Value.cast(v).shape()) for v in item)
+            m.d.sync += [r.eq(v) for r, v in zip(item_regs, item)]
+            regs.append(item_regs)
+        return regs
+
+    monkeypatch.setattr(trees, "_register", free_running)
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_transform(StereoParams(transform="rank", block=5), 2, seed=8)
