@@ -1,0 +1,112 @@
+"""Input stage: line buffers and B x B windows of both images (the paper's Fig. 1, left).
+
+Hardware counterpart of the golden model's zero-padded windows
+(:func:`npstereo.golden.transform.neighbour_planes`). Pixels arrive in raster order, one
+*position* per ``advance``. One :class:`~amaranth.lib.memory.Memory` per image (depth W,
+B-1 pixels wide) holds the previous B-1 rows of every column, so each position yields a
+raster-continuous column of B pixels; a shift register of B columns forms the window.
+The window centre trails the newest pixel by r rows and r columns; a mask computed from the
+centre's counters clears every window pixel outside the frame (zero padding without extra
+cycles at line ends).
+"""
+
+from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
+from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from .common import tag_layout, y_range
+
+__all__ = ["InputStage"]
+
+
+class InputStage(wiring.Component):
+    """Windows of both images around one centre per ``advance``.
+
+    Parameters
+    ----------
+    params : StereoParams
+        Needs ``width`` and ``height``.
+
+    Attributes
+    ----------
+    left, right : In(8)
+        The pixel entering with this ``advance`` (0 for dummy flush positions).
+    advance : In(1)
+        Take one position: shift the window, write the line buffers, step the counters.
+    start : In(1)
+        With ``advance``: this pixel is (0, 0) of a new frame (restarts the counters).
+    window_left, window_right : Out(ArrayLayout(unsigned(8), B * B))
+        Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r).
+    tag : Out(tag_layout)
+        Centre of the windows; ``round`` is 0 (positions have no rounds here).
+    latency : int
+        Positions from a pixel's entry to the window centred on it: r * W + r.
+    """
+
+    def __init__(self, params):
+        self.params = params
+        self.latency = params.radius * params.width + params.radius
+        window = data.ArrayLayout(unsigned(8), params.block * params.block)
+        super().__init__({
+            "left": In(8), "right": In(8), "advance": In(1), "start": In(1),
+            "window_left": Out(window), "window_right": Out(window),
+            "tag": Out(tag_layout(params)),
+        })
+
+    def elaborate(self, platform):
+        p = self.params
+        width, height, block, r = p.width, p.height, p.block, p.radius
+        m = Module()
+
+        col = Signal(range(width))
+        addr = Mux(self.start, 0, col)
+        next_addr = Mux(addr == width - 1, 0, addr + 1)
+        with m.If(self.advance):
+            m.d.sync += col.eq(next_addr)
+
+        # Centre counters: position 0 of a frame is centred r rows and r columns earlier.
+        first = -(r * width + r)
+        first_x, first_y = first % width, first // width
+        _, highest = y_range(p)
+        tag = Signal(tag_layout(p))
+        with m.If(self.advance):
+            m.d.sync += tag.live.eq(1)
+            with m.If(self.start):
+                m.d.sync += [tag.x.eq(first_x), tag.y.eq(first_y)]
+            with m.Elif(tag.x == width - 1):
+                m.d.sync += tag.x.eq(0)
+                with m.If(tag.y < highest):
+                    m.d.sync += tag.y.eq(tag.y + 1)
+            with m.Else():
+                m.d.sync += tag.x.eq(tag.x + 1)
+        m.d.comb += self.tag.eq(tag)
+
+        # Column registers: columns[c][row] for c = 0 (oldest, dx = -r) .. B-1 (newest).
+        row_ok = [(tag.y + dy >= 0) & (tag.y + dy < height) for dy in range(-r, r + 1)]
+        col_ok = [(tag.x + dx >= 0) & (tag.x + dx < width) for dx in range(-r, r + 1)]
+        for name, pixel, window in (("left", self.left, self.window_left),
+                                    ("right", self.right, self.window_right)):
+            # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
+            m.submodules[f"lines_{name}"] = lines = Memory(
+                shape=unsigned(8 * (block - 1)), depth=width, init=[])
+            rd = lines.read_port(domain="sync")
+            wr = lines.write_port()
+            older = [rd.data[8 * s:8 * s + 8] for s in range(block - 1)]
+            m.d.comb += [
+                rd.addr.eq(next_addr), rd.en.eq(self.advance),
+                wr.addr.eq(addr), wr.en.eq(self.advance),
+                wr.data.eq(Cat(pixel, *older[:block - 2])),
+            ]
+            newest_column = list(reversed(older)) + [pixel]  # top (dy = -r) to bottom
+            columns = [[Signal(8, name=f"{name}_c{c}_r{row}") for row in range(block)]
+                       for c in range(block)]
+            with m.If(self.advance):
+                for c in range(block - 1):
+                    m.d.sync += [dst.eq(src) for dst, src in zip(columns[c], columns[c + 1])]
+                m.d.sync += [dst.eq(src) for dst, src in zip(columns[block - 1], newest_column)]
+            for row in range(block):
+                for c in range(block):
+                    m.d.comb += window[row * block + c].eq(
+                        Mux(row_ok[row] & col_ok[c], columns[c][row], 0))
+        return m
