@@ -1,0 +1,130 @@
+"""``npstereo cosim``: one whole frame through the generated core in an HDL simulator.
+
+Builds the core for the frame size, streams the frame through Verilator or Icarus Verilog
+under cocotb (or through Amaranth's own simulator), compares every output pixel with the
+golden model, writes both disparity maps as PNGs and prints the verdict. Exit code 1 on
+any mismatch, 2 on bad input.
+"""
+
+import re
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from ..golden.data import load_middlebury, to_gray
+from ..golden.params import UserError
+from ..golden.pipeline import disparity_map
+from ..golden.synthetic import synthetic_pair
+from .cmd_match import add_matching_arguments, params_from_args
+from .plots import save_disparity_png
+
+__all__ = ["add_parser", "run", "parse_crop"]
+
+SIMULATORS = ("verilator", "icarus", "amaranth")
+
+
+def parse_crop(text, width, height):
+    """``WxH`` -> (w, h), at most the image size."""
+    match = re.fullmatch(r"(\d+)[xX](\d+)", text or "")
+    if match is None:
+        raise UserError(f"--crop must be WIDTHxHEIGHT (e.g. 64x32), not {text!r}")
+    w, h = int(match[1]), int(match[2])
+    if not (1 <= w <= width and 1 <= h <= height):
+        raise UserError(f"--crop {text} must lie within the {width}x{height} image")
+    return w, h
+
+
+def _frame(args):
+    if args.synthetic:
+        pair = synthetic_pair(disparities=args.disparities, seed=args.seed)
+    else:
+        pair = load_middlebury(args.dataset)
+    left, right = to_gray(pair.left), to_gray(pair.right)
+    height, width = left.shape
+    if args.crop is not None:
+        width, height = parse_crop(args.crop, width, height)
+        left, right = left[:height, :width].copy(), right[:height, :width].copy()
+    return pair.name, left, right
+
+
+def _out_dir(value):
+    out = Path(value)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {value} exists and is not a directory")
+    return out
+
+
+def run(args):
+    from ..sim.frames import compare_frame, decode_map, expected_words
+    out = _out_dir(args.out)
+    if args.clock_mhz <= 0:
+        raise UserError(f"--clock-mhz must be > 0, not {args.clock_mhz}")
+    base = params_from_args(args)
+    name, left, right = _frame(args)
+    params = base.with_size(left.shape[1], left.shape[0])
+    golden = disparity_map(left, right, params).disparity
+    pixels = params.width * params.height
+    print(f"{args.simulator}: {name} {params.describe()}", file=sys.stderr)
+    start = time.perf_counter()
+    build_seconds = 0.0
+    if args.simulator != "amaranth":
+        print("building the core and the simulation model (cached) ...", file=sys.stderr)
+    with tqdm(total=pixels, desc=f"cosim {args.simulator}", unit="px", file=sys.stderr,
+              leave=False) as bar:
+        if args.simulator == "amaranth":
+            from ..sim.amaranth_run import run_amaranth
+            data, tuser, tlast, cycles = run_amaranth(params, left, right, bar.update)
+            comparison = compare_frame(expected_words(golden, params), data, tuser, tlast,
+                                       params)
+            hardware = decode_map(data, params)
+        else:
+            from ..sim.cosim import CosimError, run_frame
+            try:
+                result, model = run_frame(args.simulator, params, left, right,
+                                          progress=bar.update, golden=golden)
+            except CosimError as error:
+                print(f"npstereo: cosim failed: {error}", file=sys.stderr)
+                return 1
+            _, comparison = result.frames[0]
+            cycles = result.cycles
+            build_seconds = model.seconds
+            hardware = np.load(result.run_dir / "disparity.npy")
+    seconds = time.perf_counter() - start
+    hardware_png, golden_png = out / "hardware.png", out / "golden.png"
+    save_disparity_png(hardware_png, hardware, params.disparities - 1)
+    save_disparity_png(golden_png, golden, params.disparities - 1)
+    fps = args.clock_mhz * 1e6 / cycles if cycles > 0 else 0.0
+    verdict = "bit-exact" if comparison.ok else comparison.message()
+    print(f"pixels compared:  {comparison.pixels}")
+    print(f"mismatches:       {comparison.mismatches} ({verdict})")
+    print(f"cycles per frame: {cycles} ({cycles / pixels:.2f} per pixel)")
+    print(f"frame rate:       {fps:.1f} frames/s at {args.clock_mhz:g} MHz")
+    print(f"time:             {seconds:.1f} s ({build_seconds:.1f} s building)")
+    print(f"maps:             {hardware_png} (hardware), {golden_png} (golden)")
+    return 0 if comparison.ok else 1
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "cosim", help="co-simulate the generated core on one frame, bit for bit",
+        description="Generate the core for the frame size, stream one frame through an HDL "
+                    "simulator under cocotb (Verilator, Icarus) or through Amaranth's simulator, "
+                    "and compare every output pixel with the golden model. Exit code 1 on any "
+                    "mismatch.")
+    parser.add_argument("--simulator", required=True, choices=SIMULATORS,
+                        help="verilator (fast), icarus, or amaranth (slow: small crops only)")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--dataset", help="Middlebury scene folder (e.g. .../teddy)")
+    source.add_argument("--synthetic", action="store_true",
+                        help="a seeded synthetic scene instead of a dataset")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scene")
+    add_matching_arguments(parser)
+    parser.add_argument("--crop", help="simulate only the top-left WIDTHxHEIGHT pixels")
+    parser.add_argument("--clock-mhz", type=float, default=100.0,
+                        help="clock for the implied frame rate (default 100)")
+    parser.add_argument("--out", required=True,
+                        help="folder for hardware.png and golden.png")
+    parser.set_defaults(run=run)
