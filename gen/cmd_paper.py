@@ -47,6 +47,16 @@ BAYER_GAINS = (0.6, 1.0, 0.75)
 BAYER_READ_NOISE = 2.0
 
 
+#: Row labels of the Fig. 12-style grid, in the order of the conditions.
+ROW_NAMES = ("clean", "noise", "bayer", "bayer, uncorrected")
+
+
+def max_shown_disparity(truth, disparities):
+    """Top of the colour scale: the ground truth's maximum, so the colours use their range."""
+    known = truth[~np.isnan(truth)]
+    return int(np.ceil(known.max())) if known.size else disparities - 1
+
+
 def _mad(measured, reference):
     pairs = [(m, r) for m, r in zip(measured, reference) if r is not None]
     return float(np.mean([abs(m - r) for m, r in pairs])) if pairs else None
@@ -154,13 +164,15 @@ def run(args):
             text = _measured_table(title, measured, blocks)
         sections.append(f"{text}\n\n![{key}]({key}.png)\n")
 
-    grid = [("", [("ground truth", pair.ground_truth)])]
-    grid += [(c.label, [(t, maps[(c.label, t)]) for t in TRANSFORMS]) for c in conditions]
+    shown = max_shown_disparity(pair.ground_truth, args.disparities)
+    short = {c.label: name for c, name in zip(conditions, ROW_NAMES)}
+    grid = [(short[c.label], [pair.ground_truth] + [maps[(c.label, t)] for t in TRANSFORMS])
+            for c in conditions]
     largest = max(blocks)
     disparity_grid(out / "fig12.png", f"{pair.name}: disparity maps after the L/R check, "
                    f"{largest}x{largest} transform, 3x3 aggregation, D={args.disparities}",
-                   grid, args.disparities - 1)
-    save_disparity_png(out / "ground_truth.png", pair.ground_truth, args.disparities - 1)
+                   ["ground truth", *TRANSFORMS], grid, shown)
+    save_disparity_png(out / "ground_truth.png", pair.ground_truth, shown)
 
     total = sum(r["seconds"] for r in rows)
     document = "\n".join([

@@ -70,17 +70,27 @@ def plot_series(path, title, x_labels, measured, reference=None, ylabel="correct
     save_figure(path, figure)
 
 
-def disparity_grid(path, title, rows, max_disparity):
-    """A grid of disparity maps: ``rows`` is a list of (row label, [(title, map), ...])."""
-    columns = max(len(images) for _, images in rows)
-    height, width = np.asarray(rows[0][1][0][1]).shape[:2]
-    scale = 2.2 / max(width, height) * max(width, 1)
-    figure = Figure(figsize=(columns * scale, len(rows) * scale * height / width + 0.6))
-    for r, (label, images) in enumerate(rows):
-        for c, (name, disparity) in enumerate(images):
-            axes = figure.add_subplot(len(rows), columns, r * columns + c + 1)
-            axes.imshow(colour_disparity(disparity, max_disparity), interpolation="nearest")
-            axes.set_title(f"{label}: {name}" if label else name, fontsize=7)
-            axes.set_axis_off()
+def disparity_grid(path, title, columns, rows, max_disparity):
+    """A grid of disparity maps: one column per name in ``columns``, one row per entry of
+    ``rows`` given as (row label, [map per column]); a map may be None for an empty cell.
+    """
+    first = next(m for _, maps in rows for m in maps if m is not None)
+    height, width = np.asarray(first).shape[:2]
+    cell = 2.2
+    figure = Figure(figsize=(len(columns) * cell, len(rows) * cell * height / width + 0.5),
+                    layout="constrained")
+    for r, (label, maps) in enumerate(rows):
+        for c, disparity in enumerate(maps):
+            axes = figure.add_subplot(len(rows), len(columns), r * len(columns) + c + 1)
+            axes.set_xticks([])
+            axes.set_yticks([])
+            if disparity is not None:
+                axes.imshow(colour_disparity(disparity, max_disparity), interpolation="nearest")
+            else:
+                axes.set_frame_on(False)
+            if r == 0:
+                axes.set_title(columns[c], fontsize=8)
+            if c == 0:
+                axes.set_ylabel(label, fontsize=8)
     figure.suptitle(title, fontsize=9)
     save_figure(path, figure)
