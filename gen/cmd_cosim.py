@@ -45,8 +45,10 @@ def _frame(args):
     left, right = to_gray(pair.left), to_gray(pair.right)
     height, width = left.shape
     if args.crop is not None:
-        width, height = parse_crop(args.crop, width, height)
-        left, right = left[:height, :width].copy(), right[:height, :width].copy()
+        w, h = parse_crop(args.crop, width, height)
+        # The centre holds the scene's objects; corners are often featureless background.
+        x, y = (width - w) // 2, (height - h) // 2
+        left, right = left[y:y + h, x:x + w].copy(), right[y:y + h, x:x + w].copy()
     return pair.name, left, right
 
 
@@ -122,7 +124,7 @@ def add_parser(subparsers):
                         help="a seeded synthetic scene instead of a dataset")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scene")
     add_matching_arguments(parser)
-    parser.add_argument("--crop", help="simulate only the top-left WIDTHxHEIGHT pixels")
+    parser.add_argument("--crop", help="simulate only the central WIDTHxHEIGHT pixels")
     parser.add_argument("--clock-mhz", type=float, default=100.0,
                         help="clock for the implied frame rate (default 100)")
     parser.add_argument("--out", required=True,

@@ -133,8 +133,11 @@ class Build:
         return get_runner(self.simulator)
 
 
-def build(simulator, sources, top, build_root=None):
+def build(simulator, sources, top, build_root=None, optimize=True):
     """Build ``sources`` (mapping file name -> Verilog text) for ``simulator``, cached.
+
+    ``optimize=False`` compiles a Verilator model without C++ optimisation: builds in a
+    fraction of the time, runs slower; right for the small frames of the test suite.
 
     Returns
     -------
@@ -146,7 +149,8 @@ def build(simulator, sources, top, build_root=None):
     require("iverilog" if simulator == "icarus" else "verilator")
     use_project_tools()
     args = VERILATOR_ARGS if simulator == "verilator" else []
-    key = hashlib.sha256(json.dumps([simulator, top, args, sorted(sources.items())])
+    makeflags = VERILATOR_MAKEFLAGS + ("" if optimize else " OPT_FAST=-O0 OPT_SLOW=-O0")
+    key = hashlib.sha256(json.dumps([simulator, top, args, makeflags, sorted(sources.items())])
                          .encode()).hexdigest()[:16]
     directory = Path(build_root or default_build_root()) / key
     result = Build(simulator, top, directory, [directory / name for name in sources])
@@ -164,7 +168,7 @@ def build(simulator, sources, top, build_root=None):
             _seed_runtime(Path(build_root or default_build_root()), result.sim_dir)
         saved = os.environ.get("MAKEFLAGS")
         if simulator == "verilator":
-            os.environ["MAKEFLAGS"] = f"{saved or ''} {VERILATOR_MAKEFLAGS}".strip()
+            os.environ["MAKEFLAGS"] = f"{saved or ''} {makeflags}".strip()
         try:
             runner.build(sources=result.sources, hdl_toplevel=top, build_dir=result.sim_dir,
                          build_args=args, timescale=("1ns", "1ps"),
@@ -269,7 +273,8 @@ def _quiet_cycles(params):
     return 4 * (params.block + params.aggregation + 4) * params.width * params.rounds + 2000
 
 
-def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_root=None):
+def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_root=None,
+               optimize=False):
     """Drive ``npstereo_core`` with cocotbext-axi through a list of plan steps.
 
     Parameters
@@ -289,9 +294,11 @@ def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_r
         bit-exact.
     core_text : str, optional
         Verilog of the core; generated from ``params`` when omitted.
+    optimize : bool
+        See :func:`build`; cocotbext-axi, not the model, limits the speed here.
     """
     core_text = core_verilog(params) if core_text is None else core_text
-    model = build(simulator, {"core.v": core_text}, CORE_TOP, build_root)
+    model = build(simulator, {"core.v": core_text}, CORE_TOP, build_root, optimize)
     arrays = {}
     for index, (left, right) in enumerate(frames):
         arrays[f"in{index}"], arrays[f"out{index}"], _ = golden_words(left, right, params)
@@ -303,7 +310,7 @@ def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_r
 
 
 def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpressure=0.0,
-              progress=None, build_root=None, golden=None):
+              progress=None, build_root=None, golden=None, optimize=True):
     """One whole frame through the Verilog harness (fast: no per-pixel Python).
 
     ``progress(n)`` is called with the number of further output pixels received, from
@@ -312,7 +319,7 @@ def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpres
     """
     core_text = core_verilog(params) if core_text is None else core_text
     sources = {"core.v": core_text, "harness.v": harness_verilog(params, idle, backpressure)}
-    model = build(simulator, sources, HARNESS_TOP, build_root)
+    model = build(simulator, sources, HARNESS_TOP, build_root, optimize)
     if golden is None:
         inputs, expected, golden = golden_words(left, right, params)
     else:

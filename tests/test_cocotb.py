@@ -1,0 +1,184 @@
+"""Co-simulation of the generated Verilog under cocotb on Verilator and Icarus Verilog.
+
+Every output pixel is compared with the golden model inside the cocotb test (see
+``sim/cocotb_tests.py``); a failure names the first differing pixel and the count.
+Builds are cached per configuration under ``build/cosim/<hash>/`` and shared by the tests
+of one configuration, so each Verilator model is compiled once (without C++ optimisation:
+the frames are tiny). Frames are 40 x 12.
+
+Icarus Verilog currently fails every run: the generated Verilog declares the memory
+read-data registers without an initial value, Icarus starts them at X, and the X reaches
+``m_axis_tdata`` (Verilator, being two-state, starts them at 0). These tests are marked
+as strict expected failures: the marker must go when the core no longer depends on
+uninitialised read data.
+"""
+
+import numpy as np
+import pytest
+
+from npstereo.gen.cli import main
+from npstereo.golden.data import to_gray
+from npstereo.golden.params import StereoParams
+from npstereo.golden.synthetic import synthetic_pair
+from npstereo.hdl import transform as hdl_transform
+from npstereo.hdl import trees
+from npstereo.sim import cosim
+
+WIDTH, HEIGHT = 40, 12
+
+ICARUS_X = pytest.mark.xfail(
+    raises=cosim.CosimError, strict=True,
+    reason="memory read registers start at X in Icarus and the X reaches m_axis_tdata")
+
+
+def frames(params, count=2, seed=0):
+    """Synthetic scenes plus a random pair: textured, with every disparity present."""
+    pairs = []
+    for index in range(count - 1):
+        pair = synthetic_pair(width=WIDTH, height=HEIGHT, disparities=params.disparities,
+                              seed=seed + index)
+        pairs.append((to_gray(pair.left), to_gray(pair.right)))
+    rng = np.random.default_rng(seed)
+    left = rng.integers(0, 256, (HEIGHT, WIDTH), dtype=np.uint8)
+    pairs.append((left, np.roll(left, -2, axis=1)))
+    return pairs
+
+
+def config(transform, block, disparities, rounds, lr):
+    return StereoParams(transform=transform, block=block, disparities=disparities,
+                        rounds=rounds, lr_threshold=lr).with_size(WIDTH, HEIGHT)
+
+
+def assert_bit_exact(result):
+    assert result.frames, "the run compared no frame"
+    assert result.ok, result.message()
+
+
+#: Back to back with 30 % idle cycles and 30 % backpressure, reset, a line 3 pixels short,
+#: a reset in the middle of a frame, a line 4 pixels long; every good frame bit-exact.
+FULL_PLAN = [
+    {"op": "frames", "frames": [0, 1], "idle": 0.3, "backpressure": 0.3},
+    {"op": "reset"},
+    {"op": "misframed", "frame": 0, "line": 3, "delta": -3, "good": 1},
+    {"op": "abort", "frame": 0, "lines": 5},
+    {"op": "frames", "frames": [1, 0]},
+    {"op": "misframed", "frame": 1, "line": 7, "delta": 4, "good": 0, "idle": 0.2},
+]
+
+#: Traffic only: two frames back to back under random idle cycles and backpressure.
+TRAFFIC_PLAN = [{"op": "frames", "frames": [0, 1], "idle": 0.3, "backpressure": 0.3}]
+
+CONFIGS = {
+    "census-5-D8-R2-lr1": (config("census", 5, 8, 2, 1), FULL_PLAN),
+    "ext-rank-3-D4-R1-nolr": (config("ext-rank", 3, 4, 1, None), TRAFFIC_PLAN),
+    "rank-7-D8-R4-lr0": (config("rank", 7, 8, 4, 0), TRAFFIC_PLAN),
+    "ext-census-3-D6-R3-lr2": (config("ext-census", 3, 6, 3, 2), TRAFFIC_PLAN),
+}
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_verilator_stream(name):
+    params, plan = CONFIGS[name]
+    assert_bit_exact(cosim.run_stream("verilator", params, frames(params), plan))
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+@ICARUS_X
+def test_icarus_stream(name):
+    params, plan = CONFIGS[name]
+    assert_bit_exact(cosim.run_stream("icarus", params, frames(params), plan))
+
+
+@ICARUS_X
+def test_icarus_harness_frame():
+    """The fast path (Verilog stimulus/response harness) with idle cycles and backpressure."""
+    params = config("census", 5, 8, 2, 1)
+    left, right = frames(params, 1)[0]
+    result, _ = cosim.run_frame("icarus", params, left, right, idle=0.3, backpressure=0.3,
+                                optimize=False)
+    assert_bit_exact(result)
+    assert result.cycles >= WIDTH * HEIGHT * params.rounds
+
+
+def test_broken_core_fails_verilator(monkeypatch):
+    """A core generated with ``>=`` instead of ``>`` in the transform must be caught."""
+    monkeypatch.setattr(hdl_transform, "xi", lambda centre, neighbour: centre >= neighbour)
+    params, _ = CONFIGS["census-5-D8-R2-lr1"]
+    result = cosim.run_stream("verilator", params, frames(params), TRAFFIC_PLAN)
+    assert not result.ok
+    assert result.mismatches > 0
+    label, comparison = next((label, c) for label, c in result.frames if not c.ok)
+    x, y, expected, got = comparison.first
+    assert expected != got
+    assert f"first at x={x} y={y}" in result.message()
+
+
+def test_compare_reports_first_pixel_and_count():
+    params = config("census", 3, 4, 1, None)
+    expected = np.zeros(WIDTH * HEIGHT, dtype=np.int64)
+    got = expected.copy()
+    got[WIDTH * 2 + 5] = 0x83
+    got[WIDTH * 4] = 0x81
+    tuser = np.arange(got.size) == 0
+    tlast = np.arange(got.size) % WIDTH == WIDTH - 1
+    from npstereo.sim.frames import compare_frame
+    comparison = compare_frame(expected, got, tuser, tlast, params)
+    assert (comparison.mismatches, comparison.first) == (2, (5, 2, -1, 3))
+    short = compare_frame(expected, got[:-WIDTH], tuser, tlast, params)
+    assert short.mismatches == 2 + WIDTH and not short.ok
+    assert "received 440 output pixels, expected 480" in short.message()
+    tlast[WIDTH - 1] = False
+    assert "m_axis_tlast wrong on 1 beats, first at x=39 y=0" in \
+        compare_frame(expected, expected, tuser, tlast, params).message()
+
+
+# npstereo cosim --------------------------------------------------------------------------
+
+SMALL = ["--synthetic", "--disparities", "8", "--block", "5", "--rounds", "2",
+         "--crop", "40x12"]
+
+
+def test_cli_amaranth_bit_exact(tmp_path, capsys):
+    assert main(["cosim", "--simulator", "amaranth", *SMALL, "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "pixels compared:  480" in out and "mismatches:       0 (bit-exact)" in out
+    assert "frames/s at 100 MHz" in out
+    assert (tmp_path / "hardware.png").stat().st_size > 0
+    assert (tmp_path / "golden.png").stat().st_size > 0
+
+
+def test_cli_mismatch_exits_1(tmp_path, capsys, monkeypatch):
+    # Adders that drop their carry: popcounts and aggregated costs wrap around.
+    monkeypatch.setattr(trees, "_add", lambda lower, upper: (
+        (lower[0] + upper[0])[:max(len(lower[0]), len(upper[0]))],))
+    assert main(["cosim", "--simulator", "amaranth", *SMALL, "--out", str(tmp_path)]) == 1
+    assert "pixels differ; first at x=" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--crop", "40by12"], "--crop must be WIDTHxHEIGHT"),
+    (["--crop", "4000x12"], "must lie within"),
+    (["--crop", "8x8"], "image width must be an integer >"),
+    (["--rounds", "3"], "rounds must divide disparities"),
+    (["--clock-mhz", "0"], "--clock-mhz must be > 0"),
+    (["--block", "4"], "block size must be an odd integer"),
+])
+def test_cli_bad_input(tmp_path, capsys, args, message):
+    base = ["cosim", "--simulator", "amaranth", "--synthetic", "--disparities", "8",
+            "--crop", "40x12", "--out", str(tmp_path / "out")]
+    assert main(base + args) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_bad_dataset_and_out(tmp_path, capsys):
+    out = tmp_path / "file"
+    out.write_text("x")
+    assert main(["cosim", "--simulator", "icarus", "--synthetic", "--out", str(out)]) == 2
+    assert "is not a directory" in capsys.readouterr().err
+    assert main(["cosim", "--simulator", "icarus", "--dataset", str(tmp_path / "none"),
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["cosim", "--simulator", "modelsim", "--synthetic", "--out", "o"]) == 2
+    assert not (tmp_path / "o").exists()
