@@ -15,7 +15,7 @@ from ..golden.params import UserError
 __all__ = ["main", "UsageError"]
 
 #: Subcommand modules, in the order ``npstereo --help`` lists them.
-COMMANDS = ["match", "eval", "paper", "demo", "verilog", "cosim"]
+COMMANDS = ["match", "eval", "paper", "demo", "verilog", "cosim", "report"]
 
 
 class UsageError(UserError):
