@@ -26,8 +26,10 @@ from npstereo.sim import cosim
 
 WIDTH, HEIGHT = 40, 12
 
+# The stream test stops at the first X (cocotbext-axi cannot read it): CosimError; the
+# harness records X words as mismatches: AssertionError.
 ICARUS_X = pytest.mark.xfail(
-    raises=cosim.CosimError, strict=True,
+    raises=(cosim.CosimError, AssertionError), strict=True,
     reason="memory read registers start at X in Icarus and the X reaches m_axis_tdata")
 
 
@@ -35,8 +37,9 @@ def frames(params, count=2, seed=0):
     """Synthetic scenes plus a random pair: textured, with every disparity present."""
     pairs = []
     for index in range(count - 1):
-        pair = synthetic_pair(width=WIDTH, height=HEIGHT, disparities=params.disparities,
-                              seed=seed + index)
+        # The scene generator wants D >= 8; a scene deeper than D is still a valid input.
+        pair = synthetic_pair(width=WIDTH, height=HEIGHT,
+                              disparities=max(8, params.disparities), seed=seed + index)
         pairs.append((to_gray(pair.left), to_gray(pair.right)))
     rng = np.random.default_rng(seed)
     left = rng.integers(0, 256, (HEIGHT, WIDTH), dtype=np.uint8)
