@@ -8,22 +8,46 @@ import numpy as np
 __all__ = ["aggregate"]
 
 
-def aggregate(costs, size, rows=None):
+def aggregate(costs, size, rows=None, out=None, scratch=None):
     """Box sum of ``costs`` over ``size`` x ``size`` around every pixel.
 
-    ``costs`` covers a band of image rows; ``rows`` (start, stop) selects the rows of the
-    band to return, whose vertical neighbours must lie in the band or outside the image.
+    Parameters
+    ----------
+    costs : (rows, W) ndarray
+        Matching costs of a band of image rows (or of the whole image).
+    size : int
+        Aggregation window size A (odd).
+    rows : (start, stop), optional
+        The rows of the band to return; their vertical neighbours must lie in the band or
+        outside the image. Default: every row, the band being the whole image.
+    out : ndarray, optional
+        (stop - start, W) array of ``costs.dtype`` for the result.
+    scratch : ndarray, optional
+        An array shaped like ``costs`` for the horizontal sums (saves an allocation per d).
+
+    Returns
+    -------
+    ndarray
+        The aggregated costs of rows ``start .. stop - 1``.
     """
     a = (size - 1) // 2
     height, width = costs.shape
-    padded = np.zeros((height, width + 2 * a), dtype=costs.dtype)
-    padded[:, a:a + width] = costs
-    horizontal = padded[:, 0:width].copy()
-    for i in range(1, 2 * a + 1):
-        horizontal += padded[:, i:i + width]
     start, stop = (0, height) if rows is None else rows
-    out = np.zeros((stop - start, width), dtype=costs.dtype)
-    for j in range(-a, a + 1):
-        lo, hi = max(start + j, 0), min(stop + j, height)
-        out[lo - start - j:hi - start - j] += horizontal[lo:hi]
+    if out is None:
+        out = np.empty((stop - start, width), dtype=costs.dtype)
+    horizontal = np.empty_like(costs) if scratch is None else scratch
+    horizontal[...] = costs
+    for i in range(1, a + 1):
+        horizontal[:, i:] += costs[:, :width - i]
+        horizontal[:, :width - i] += costs[:, i:]
+    # Row y sums horizontal rows y - a .. y + a that exist; rows beyond the band are
+    # outside the image, so the clipped range is exact.
+    out[...] = horizontal[start:stop]
+    for j in range(1, a + 1):
+        below = min(stop, height - j)
+        if below > start:
+            out[:below - start] += horizontal[start + j:below + j]
+        above = max(start, j)
+        if above < stop:
+            out[above - start:] += horizontal[above - j:stop - j]
     return out

@@ -6,44 +6,74 @@ and such pairs only ever reach valid outputs through the right-referenced map's 
 
 import numpy as np
 
-__all__ = ["matching_costs"]
+__all__ = ["cost_dtype", "ext_census_totals", "matching_costs"]
 
 
-def _shifted_pair(left, right, d):
-    """Left pixels x >= d and their right partners x - d, along the last axis."""
-    width = left.shape[-1]
-    return left[..., d:], right[..., :width - d]
+def cost_dtype(params):
+    """The narrowest unsigned dtype that holds every aggregated cost exactly."""
+    bits = params.aggregated_cost_bits
+    return np.uint16 if bits <= 16 else np.uint32 if bits <= 32 else np.uint64
 
 
-def _rank_cost(left, right, d):
-    a, b = _shifted_pair(left.astype(np.int64), right.astype(np.int64), d)
-    return np.abs(a - b)
+def _rank_cost(left, right, out):
+    # |a - b| as max - min stays exact in the transform's own unsigned dtype.
+    np.subtract(np.maximum(left, right), np.minimum(left, right), out=out, casting="unsafe")
 
 
-def _census_cost(left, right, d):
-    a, b = _shifted_pair(left, right, d)
-    return np.bitwise_count(a ^ b).sum(axis=0, dtype=np.int64)
+def _census_cost(left, right, out):
+    ones = np.bitwise_count(left ^ right)
+    np.add.reduce(ones, axis=0, dtype=out.dtype, out=out)
 
 
-def _ext_census_cost(left, right, d):
-    a, b = _shifted_pair(left, right, d)
-    k = a.shape[0]
-    # 128 terms of at most 255 fit uint16 even when added wrapping in int16.
-    total = np.zeros(a.shape[1:], dtype=np.int64)
-    for start in range(0, k, 128):
-        diff = a[start:start + 128].astype(np.int16) - b[start:start + 128]
-        np.abs(diff, out=diff)
-        total += diff.sum(axis=0, dtype=np.int16).view(np.uint16)
-    return total
+def _ext_census_cost(left, right, out, totals):
+    # sum |u - v| = sum u + sum v - 2 sum min(u, v): one uint8 pass over the k bytes instead
+    # of three (max, min, subtract); the byte sums are computed once, not once per d.
+    np.add.reduce(np.minimum(left, right), axis=0, dtype=out.dtype, out=out)
+    out *= out.dtype.type(2)
+    np.subtract(totals, out, out=out)
 
 
-_COSTS = {"rank": _rank_cost, "ext-rank": _rank_cost, "census": _census_cost,
-          "ext-census": _ext_census_cost}
+_COSTS = {"rank": _rank_cost, "ext-rank": _rank_cost, "census": _census_cost}
 
 
-def matching_costs(left_t, right_t, d, params):
-    """Cost of every left pixel against its right partner at disparity d. (H, W) int64."""
-    costs = _COSTS[params.transform](left_t, right_t, d)
-    out = np.zeros(costs.shape[:-1] + (costs.shape[-1] + d,), dtype=np.int64)
-    out[..., d:] = costs
+def ext_census_totals(left_t, right_t, d, dtype):
+    """sum u + sum v of the ext-census pairs at disparity d: (rows, W - d) of ``dtype``."""
+    width = left_t.shape[-1]
+    return (np.add.reduce(left_t[..., d:], axis=0, dtype=dtype)
+            + np.add.reduce(right_t[..., :width - d], axis=0, dtype=dtype))
+
+
+def matching_costs(left_t, right_t, d, params, out=None, totals=None):
+    """Cost of every left pixel against its right partner at disparity d.
+
+    Parameters
+    ----------
+    left_t, right_t : ndarray
+        Transformed images (or bands of rows of them) as :func:`.transform.transform`
+        returns them; the last two axes are rows and columns.
+    d : int
+        Disparity: left column x is matched with right column x - d.
+    params : StereoParams
+    out : ndarray, optional
+        (rows, W) array of :func:`cost_dtype` to write into (saves an allocation per d).
+    totals : ndarray, optional
+        ext-census only: ``ext_census_totals(left_t, right_t, d, cost_dtype(params))``, when
+        the caller has it cheaper (from per-pixel byte sums computed once per image).
+
+    Returns
+    -------
+    ndarray
+        (rows, W) of :func:`cost_dtype`; 0 where x - d < 0.
+    """
+    width = left_t.shape[-1]
+    if out is None:
+        out = np.empty(left_t.shape[-2:], dtype=cost_dtype(params))
+    out[:, :d] = 0
+    left, right = left_t[..., d:], right_t[..., :width - d]
+    if params.transform == "ext-census":
+        if totals is None:
+            totals = ext_census_totals(left_t, right_t, d, out.dtype)
+        _ext_census_cost(left, right, out[:, d:], totals)
+    else:
+        _COSTS[params.transform](left, right, out[:, d:])
     return out

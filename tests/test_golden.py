@@ -1,0 +1,244 @@
+"""The golden model against the slow per-pixel reference (tests/reference.py).
+
+Every stage (transform, matching costs, aggregation) and the whole disparity map are compared
+pixel for pixel on small synthetic images, for all four transforms, several block sizes,
+disparity ranges, round counts, aggregation sizes and L/R settings. The images are chosen to
+produce many tied costs (few gray levels, flat regions, periodic stripes), where the border
+and tie rules decide the result. The ``test_broken_*`` cases break one rule of the golden
+model at a time and check that the comparison with the reference catches it.
+"""
+
+import numpy as np
+import pytest
+
+from npstereo.golden import aggregation as golden_aggregation
+from npstereo.golden import matching_cost as golden_cost
+from npstereo.golden import pipeline as golden_pipeline
+from npstereo.golden import transform as golden_transform
+from npstereo.golden import wta as golden_wta
+from npstereo.golden.params import TRANSFORMS, StereoParams
+
+import reference
+
+# Images ------------------------------------------------------------------------------------
+
+
+def make_pair(kind, height, width, seed):
+    """A left image and a right image that is mostly the left one shifted by 1-4 columns.
+
+    kinds: ``random`` (uniform bytes), ``levels`` (3 gray levels: ties everywhere), ``flat``
+    (constant 4 x 4 tiles, some 0 like the padding), ``stripes`` (period-3 columns: costs
+    repeat every 3 disparities), ``saturated`` (only 0 and 255: extreme ext-census bytes).
+    """
+    rng = np.random.default_rng(seed)
+    if kind == "random":
+        left = rng.integers(0, 256, (height, width))
+    elif kind == "levels":
+        left = rng.choice([0, 100, 101], (height, width))
+    elif kind == "flat":
+        tiles = rng.choice([0, 7, 200], (height // 4 + 1, width // 4 + 1))
+        left = np.kron(tiles, np.ones((4, 4), dtype=int))[:height, :width]
+    elif kind == "stripes":
+        left = np.tile(np.array([10, 50, 50]), width // 3 + 1)[None, :width].repeat(height, 0)
+        left = left + (rng.random((height, width)) < 0.05) * 30
+    elif kind == "saturated":
+        left = rng.choice([0, 255], (height, width))
+    else:
+        raise ValueError(kind)
+    shift = rng.integers(1, 5, height)[:, None]
+    columns = np.clip(np.arange(width)[None, :] + shift, 0, width - 1)
+    right = np.take_along_axis(left, columns, axis=1)
+    noise = rng.random((height, width)) < 0.1
+    right = np.where(noise, rng.integers(0, 256, (height, width)), right)
+    return left.astype(np.uint8), right.astype(np.uint8)
+
+
+def divisors(n):
+    return [r for r in range(1, n + 1) if n % r == 0]
+
+
+# Transform --------------------------------------------------------------------------------
+
+
+def unpack_transform(values, name, block, x, y):
+    """The golden transform of pixel (x, y) in the reference's form (int or tuple)."""
+    k = block * block - 1
+    if name == "census":
+        return tuple((int(values[n // 64, y, x]) >> (n % 64)) & 1 for n in range(k))
+    if name == "ext-census":
+        return tuple(int(values[n, y, x]) for n in range(k))
+    return int(values[y, x])
+
+
+def transform_mismatches(image, name, block):
+    """Pixels whose golden transform differs from the reference's."""
+    params = StereoParams(transform=name, block=block)
+    golden = golden_transform.transform(image, params)
+    expected = reference.transform_image(image, name, block)
+    height, width = image.shape
+    return [(x, y) for y in range(height) for x in range(width)
+            if unpack_transform(golden, name, block, x, y) != expected[y][x]]
+
+
+@pytest.mark.parametrize("name", TRANSFORMS)
+@pytest.mark.parametrize("block,kind", [(3, "random"), (5, "levels"), (7, "saturated"),
+                                        (9, "flat"), (11, "random")])
+def test_transform_matches_reference(name, block, kind):
+    image, _ = make_pair(kind, 13, 17, seed=block)
+    assert transform_mismatches(image, name, block) == []
+
+
+def test_transform_of_image_smaller_than_window():
+    image = np.array([[3, 200, 5]], dtype=np.uint8)
+    for name in TRANSFORMS:
+        assert transform_mismatches(image, name, 7) == []
+
+
+# Matching costs and aggregation -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", TRANSFORMS)
+@pytest.mark.parametrize("block,aggregation,kind", [(3, 3, "levels"), (5, 1, "random"),
+                                                    (7, 5, "saturated")])
+def test_costs_and_aggregation_match_reference(name, block, aggregation, kind):
+    left, right = make_pair(kind, 9, 21, seed=block + aggregation)
+    disparities = 6
+    params = StereoParams(transform=name, block=block, disparities=disparities,
+                          aggregation=aggregation)
+    volume = reference.cost_volume(left, right, name, block, disparities)
+    aggregated = reference.aggregate(volume, aggregation)
+    left_t = golden_transform.transform(left, params)
+    right_t = golden_transform.transform(right, params)
+    for d in range(disparities):
+        costs = golden_cost.matching_costs(left_t, right_t, d, params)
+        expected = np.array([[volume[y][x][d] for x in range(21)] for y in range(9)])
+        np.testing.assert_array_equal(costs, expected, err_msg=f"costs at d={d}")
+        expected = np.array([[aggregated[y][x][d] for x in range(21)] for y in range(9)])
+        np.testing.assert_array_equal(golden_aggregation.aggregate(costs, aggregation),
+                                      expected, err_msg=f"aggregated costs at d={d}")
+
+
+# The whole disparity map ------------------------------------------------------------------
+
+#: (transform, block, D, aggregation sizes, image kind, height, width). Every case is checked
+#: for every R dividing D and for T = off, 0, 1, 3.
+MAP_CASES = [
+    ("rank", 3, 4, (1, 3), "levels", 10, 24),
+    ("rank", 5, 8, (3, 5), "random", 12, 30),
+    ("rank", 7, 12, (3,), "stripes", 16, 40),
+    ("census", 3, 8, (1, 3), "levels", 12, 28),
+    ("census", 5, 12, (3, 5), "stripes", 14, 36),
+    ("census", 7, 4, (3,), "flat", 16, 40),
+    ("census", 9, 8, (3,), "random", 12, 32),
+    ("ext-rank", 3, 12, (3,), "flat", 12, 36),
+    ("ext-rank", 5, 4, (1, 3, 5), "saturated", 10, 24),
+    ("ext-rank", 7, 8, (3,), "levels", 14, 30),
+    ("ext-census", 3, 8, (3, 5), "saturated", 12, 28),
+    ("ext-census", 5, 12, (3,), "levels", 12, 36),
+    ("ext-census", 7, 4, (1, 3), "stripes", 16, 24),
+]
+THRESHOLDS = (None, 0, 1, 3)
+
+
+def golden_map(left, right, name, block, disparities, rounds, aggregation, threshold):
+    params = StereoParams(transform=name, block=block, disparities=disparities, rounds=rounds,
+                          aggregation=aggregation, lr_threshold=threshold)
+    return golden_pipeline.disparity_map(left, right, params).disparity
+
+
+@pytest.mark.parametrize("name,block,disparities,aggregations,kind,height,width", MAP_CASES)
+def test_disparity_map_matches_reference(name, block, disparities, aggregations, kind,
+                                         height, width):
+    left, right = make_pair(kind, height, width, seed=block * disparities)
+    volume = reference.cost_volume(left, right, name, block, disparities)
+    for aggregation in aggregations:
+        aggregated = reference.aggregate(volume, aggregation)
+        for threshold in THRESHOLDS:
+            expected = reference.disparity_from_aggregated(aggregated, aggregation, threshold)
+            # Results must not depend on the round count R: each R meets the same reference.
+            for rounds in divisors(disparities):
+                got = golden_map(left, right, name, block, disparities, rounds, aggregation,
+                                 threshold)
+                np.testing.assert_array_equal(
+                    got, expected, err_msg=f"A={aggregation} T={threshold} R={rounds}")
+    # The images must exercise the check: some pixels valid, some rejected at T = 0.
+    strict = reference.disparity_from_aggregated(aggregated, aggregation, 0)
+    assert (strict[:, disparities + 1:] >= 0).any()
+
+
+def test_disparity_map_of_wide_aggregation_and_band_seams(monkeypatch):
+    """A = 7 and bands of 4 rows: aggregation windows span band boundaries."""
+    monkeypatch.setattr(golden_pipeline, "_band_rows", lambda *args: 4)
+    left, right = make_pair("levels", 11, 24, seed=7)
+    expected = reference.disparity_map(left, right, "census", 5, 6, aggregation=7)
+    for rounds in (1, 3):
+        got = golden_map(left, right, "census", 5, 6, rounds, 7, 3)
+        np.testing.assert_array_equal(got, expected)
+
+
+def test_disparity_map_of_one_block_9_ext_census():
+    left, right = make_pair("random", 10, 24, seed=9)
+    expected = reference.disparity_map(left, right, "ext-census", 9, 8, lr_threshold=1)
+    np.testing.assert_array_equal(golden_map(left, right, "ext-census", 9, 8, 2, 3, 1),
+                                  expected)
+
+
+# Deliberately broken golden models must be caught ----------------------------------------
+
+BROKEN_CASE = ("census", 5, 8, 3, "levels", 12, 30)
+
+
+def broken_case_differs():
+    """Whether the golden map of BROKEN_CASE differs from the reference (with R = 1, 2)."""
+    name, block, disparities, aggregation, kind, height, width = BROKEN_CASE
+    left, right = make_pair(kind, height, width, seed=3)
+    expected = reference.disparity_map(left, right, name, block, disparities, aggregation, 3)
+    return any(not np.array_equal(
+        golden_map(left, right, name, block, disparities, rounds, aggregation, 3), expected)
+        for rounds in (1, 2))
+
+
+def test_broken_model_baseline_matches():
+    """The unbroken model passes the case every broken variant below must fail."""
+    assert not broken_case_differs()
+
+
+def test_broken_comparison_is_caught(monkeypatch):
+    monkeypatch.setattr(golden_transform, "_xi", lambda centre, neighbour: centre >= neighbour)
+    assert broken_case_differs()
+    image, _ = make_pair("levels", 8, 9, seed=1)
+    assert transform_mismatches(image, "rank", 3)
+
+
+def test_broken_tie_rule_is_caught(monkeypatch):
+    """Ties kept at the highest disparity (``<=`` in the WTA comparisons)."""
+    monkeypatch.setattr(golden_wta, "_better", np.less_equal)
+    assert broken_case_differs()
+
+
+def test_broken_padding_is_caught(monkeypatch):
+    """Border pixels repeated instead of zero padding."""
+    monkeypatch.setattr(golden_transform, "_padded",
+                        lambda image, r: np.pad(image, r, mode="edge"))
+    assert broken_case_differs()
+    image, _ = make_pair("flat", 8, 9, seed=1)
+    assert transform_mismatches(image, "ext-census", 3)
+
+
+def test_broken_aggregation_border_is_caught(monkeypatch):
+    """The aggregation wrapping around the image instead of counting 0 outside."""
+    def wrapping(costs, size, rows=None, **buffers):
+        a = (size - 1) // 2
+        out = sum(np.roll(costs, (j, i), axis=(0, 1))
+                  for j in range(-a, a + 1) for i in range(-a, a + 1))
+        return out if rows is None else out[rows[0]:rows[1]]
+    monkeypatch.setattr(golden_pipeline, "aggregate", wrapping)
+    assert broken_case_differs()
+
+
+def test_broken_lr_threshold_is_caught(monkeypatch):
+    """|dL - dR| < T instead of <= T."""
+    real = golden_pipeline.lr_check
+    monkeypatch.setattr(golden_pipeline, "lr_check",
+                        lambda left, right, threshold: real(left, right, threshold - 1))
+    assert broken_case_differs()
