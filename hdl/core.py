@@ -41,7 +41,7 @@ class NpStereoCore(wiring.Component):
     Parameters
     ----------
     params : StereoParams
-        Must have ``width`` and ``height``.
+        Must have ``width`` and ``height`` (else :class:`ParameterError`).
     every : int
         Register spacing of the trees (see :mod:`.trees`).
 

@@ -82,9 +82,17 @@ class InputStage(wiring.Component):
                 m.d.sync += tag.x.eq(tag.x + 1)
         m.d.comb += self.tag.eq(tag)
 
-        # Column registers: columns[c][row] for c = 0 (oldest, dx = -r) .. B-1 (newest).
-        row_ok = [(tag.y + dy >= 0) & (tag.y + dy < height) for dy in range(-r, r + 1)]
-        col_ok = [(tag.x + dx >= 0) & (tag.x + dx < width) for dx in range(-r, r + 1)]
+        # One signal per window row/column and per pixel: Amaranth would otherwise rebuild
+        # the comparisons for every use.
+        row_ok = [Signal(name=f"row_ok{k}") for k in range(block)]
+        col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
+        for k, dy in enumerate(range(-r, r + 1)):
+            m.d.comb += [row_ok[k].eq((tag.y >= -dy) & (tag.y < height - dy)),
+                         col_ok[k].eq((tag.x >= -dy) & (tag.x < width - dy))]
+        keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
+                for row in range(block)]
+        m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])
+                     for row in range(block) for c in range(block)]
         for name, pixel, window in (("left", self.left, self.window_left),
                                     ("right", self.right, self.window_right)):
             # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
@@ -98,15 +106,14 @@ class InputStage(wiring.Component):
                 wr.addr.eq(addr), wr.en.eq(self.advance),
                 wr.data.eq(Cat(pixel, *older[:block - 2])),
             ]
-            newest_column = list(reversed(older)) + [pixel]  # top (dy = -r) to bottom
-            columns = [[Signal(8, name=f"{name}_c{c}_r{row}") for row in range(block)]
-                       for c in range(block)]
+            # Column c (0 = oldest, dx = -r) packs its B pixels top (dy = -r) to bottom.
+            newest_column = Cat(*reversed(older), pixel)
+            columns = [Signal(8 * block, name=f"{name}_column{c}") for c in range(block)]
             with m.If(self.advance):
-                for c in range(block - 1):
-                    m.d.sync += [dst.eq(src) for dst, src in zip(columns[c], columns[c + 1])]
-                m.d.sync += [dst.eq(src) for dst, src in zip(columns[block - 1], newest_column)]
-            for row in range(block):
-                for c in range(block):
-                    m.d.comb += window[row * block + c].eq(
-                        Mux(row_ok[row] & col_ok[c], columns[c][row], 0))
+                m.d.sync += [columns[c].eq(columns[c + 1]) for c in range(block - 1)]
+                m.d.sync += columns[block - 1].eq(newest_column)
+            # One assignment of the whole window: per-element assignments would each cost a
+            # full-width assignment cell in the netlist.
+            m.d.comb += window.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
+                                      for row in range(block) for c in range(block)))
         return m

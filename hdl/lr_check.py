@@ -12,7 +12,7 @@ last D. The left winners wait D + 1 positions in a delay line, then meet dR(x - 
 that history.
 """
 
-from amaranth.hdl import Array, Cat, Module, Mux, Signal, unsigned
+from amaranth.hdl import Array, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
