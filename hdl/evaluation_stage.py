@@ -14,6 +14,11 @@ from .common import bits_for, tag_layout
 __all__ = ["EvaluationStage"]
 
 
+def _better(candidate, best):
+    """A later partition replaces the running winner only if strictly better."""
+    return candidate < best
+
+
 class EvaluationStage(wiring.Component):
     """Running WTA over the rounds of one position.
 
@@ -48,7 +53,7 @@ class EvaluationStage(wiring.Component):
         m = Module()
         best_cost = Signal.like(self.cost)
         best_disparity = Signal.like(self.disparity)
-        take = (self.tag.round == 0) | (self.cost < best_cost)
+        take = (self.tag.round == 0) | _better(self.cost, best_cost)
         cost = Mux(take, self.cost, best_cost)
         disparity = Mux(take, self.disparity, best_disparity)
         with m.If(self.en):

@@ -7,6 +7,7 @@ valid gaps and random backpressure cost no extra simulator processes.
 import random
 
 import numpy as np
+from amaranth.hdl import ResetInserter, Signal
 from amaranth.sim import Simulator
 
 from npstereo.golden.lr_check import INVALID
@@ -32,34 +33,43 @@ def frame_beats(left, right, *, drop_last_at=None):
     return beats
 
 
-def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None,
-                 core=None):
+def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None):
     """Feed ``beats`` (and RESET markers) through a core; collect every output word.
+
+    The source keeps a beat offered until it is taken (AXI rule) but inserts random gaps
+    before offering the next; the sink drops ``tready`` at random.
 
     Returns
     -------
     dict
         ``words`` (list of (tdata, tuser, tlast)), ``errors`` (framing-error pulses),
-        ``cycles`` (clocks until the last word came out).
+        ``frame_starts`` (clock of every output word with tuser), ``cycles`` (clocks until
+        the last word came out), ``latency`` (the core's, in positions).
     """
-    core = core or NpStereoCore(params)
+    core = NpStereoCore(params)
+    rst = Signal()
+    dut = ResetInserter({"sync": rst})(core)
     rng = random.Random(seed)
-    words, state = [], {"errors": 0, "cycles": 0}
+    words, starts, state = [], [], {"errors": 0, "cycles": 0}
     expected = sum(1 for b in beats if b != RESET)
-    limit = max_cycles or int(50 * (len(beats) + core.latency * 4) * params.rounds
-                              / min(valid_prob, ready_prob))
+    slack = 4 * core.latency * params.rounds + 50
+    limit = max_cycles or int((expected * params.rounds + slack * 3)
+                              / min(valid_prob, ready_prob) + slack)
 
     async def bench(ctx):
-        index, cycle, last_word_cycle = 0, 0, 0
+        index, cycle, last_word_cycle, offering = 0, 0, 0, False
         while cycle < limit:
             if index < len(beats) and beats[index] == RESET:
                 ctx.set(core.s_axis_tvalid, 0)
-                await ctx.tick()  # let the sink see nothing new; then reset
-                index += 1
                 ctx.set(core.m_axis_tready, 0)
-                await reset(ctx)
+                ctx.set(rst, 1)
+                await ctx.tick()
+                ctx.set(rst, 0)
+                index, offering = index + 1, False
+                cycle += 1
                 continue
-            offering = index < len(beats) and rng.random() < valid_prob
+            if not offering and index < len(beats):
+                offering = rng.random() < valid_prob
             if offering:
                 data, user, last = beats[index]
                 ctx.set(core.s_axis_tdata, data)
@@ -69,36 +79,26 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
             ready = rng.random() < ready_prob
             ctx.set(core.m_axis_tready, ready)
             if offering and ctx.get(core.s_axis_tready):
-                index += 1
+                index, offering = index + 1, False
             if ready and ctx.get(core.m_axis_tvalid):
-                words.append((ctx.get(core.m_axis_tdata), ctx.get(core.m_axis_tuser),
-                              ctx.get(core.m_axis_tlast)))
+                word = (ctx.get(core.m_axis_tdata), ctx.get(core.m_axis_tuser),
+                        ctx.get(core.m_axis_tlast))
+                words.append(word)
+                if word[1]:
+                    starts.append(cycle)
                 last_word_cycle = cycle
             state["errors"] += ctx.get(core.framing_error)
             await ctx.tick()
             cycle += 1
-            if index >= len(beats) and len(words) >= expected and cycle > last_word_cycle + 4 \
-                    * core.latency * params.rounds:
+            if index >= len(beats) and cycle > last_word_cycle + slack:
                 break
         state["cycles"] = last_word_cycle + 1
 
-    async def reset(ctx):
-        ctx.set(sim_reset, 1)
-        await ctx.tick()
-        ctx.set(sim_reset, 0)
-
-    sim = Simulator(core)
+    sim = Simulator(dut)
     sim.add_clock(1e-8)
-    sim_reset = _reset_signal(core)
     sim.add_testbench(bench)
     sim.run()
-    return {"words": words, **state}
-
-
-def _reset_signal(core):
-    """The sync domain's reset, created the way ``convert`` would create it."""
-    from amaranth.hdl import ResetSignal
-    return ResetSignal("sync")
+    return {"words": words, "frame_starts": starts, "latency": core.latency, **state}
 
 
 def decode_frames(words, params):
