@@ -132,6 +132,8 @@ def run(args):
     if pair.ground_truth is None:
         raise UserError(f"dataset {pair.name} has no ground truth to evaluate against")
     left, right = condition_images(pair, condition)
+    for p in params:
+        p.with_size(left.shape[1], left.shape[0])
     jobs = {(p.transform, p.block): (left, right, p) for p in params}
     results = run_jobs(jobs, args.jobs, desc=f"eval {pair.name}")
     rows = []
