@@ -86,9 +86,11 @@ class InputStage(wiring.Component):
         # the comparisons for every use.
         row_ok = [Signal(name=f"row_ok{k}") for k in range(block)]
         col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
-        for k, dy in enumerate(range(-r, r + 1)):
-            m.d.comb += [row_ok[k].eq((tag.y >= -dy) & (tag.y < height - dy)),
-                         col_ok[k].eq((tag.x >= -dy) & (tag.x < width - dy))]
+        for k, offset in enumerate(range(-r, r + 1)):
+            m.d.comb += row_ok[k].eq((tag.y >= -offset) & (tag.y < height - offset))
+            # The column counter is always in 0 .. W-1: only one side can fail.
+            m.d.comb += col_ok[k].eq(tag.x >= -offset if offset < 0 else
+                                     tag.x < width - offset if offset > 0 else 1)
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
                 for row in range(block)]
         m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])
