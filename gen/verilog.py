@@ -4,17 +4,24 @@ The text starts with a comment recording the parameters and the tool versions, s
 generated file says what it is without its command line.
 """
 
+import subprocess
 from importlib.metadata import PackageNotFoundError, version
 
 from amaranth.back import verilog as amaranth_verilog
 
 from ..golden.params import ParameterError
 from ..hdl.core import NpStereoCore, output_width
+from ..sim.tools import VERILATOR_WAIVERS, require, tool_env
 
-__all__ = ["TOP_NAME", "core_verilog", "header"]
+__all__ = ["TOP_NAME", "LINT_WAIVERS", "core_verilog", "header", "lint"]
 
 #: Module name of the generated top level.
 TOP_NAME = "npstereo_core"
+
+#: Beyond ``sim.tools.VERILATOR_WAIVERS``: Amaranth declares every register with its reset
+#: value as initializer (the FPGA power-up state) and also assigns it in the clocked
+#: process, which -Wall reports as PROCASSINIT on every register; intended, not a bug.
+LINT_WAIVERS = ["-Wno-PROCASSINIT"]
 
 
 def _version(package):
@@ -54,3 +61,15 @@ def core_verilog(params):
     core = NpStereoCore(params)
     text = amaranth_verilog.convert(core, name=TOP_NAME, emit_src=False)
     return header(params, core) + text
+
+
+def lint(path):
+    """``verilator --lint-only -Wall`` of a generated file; returns (ok, messages).
+
+    Uses the project's Verilator and waivers (:data:`LINT_WAIVERS` on top of the shared
+    ones); a missing Verilator raises :class:`~npstereo.golden.params.UserError`.
+    """
+    command = [require("verilator"), "--lint-only", "-Wall", *VERILATOR_WAIVERS,
+               *LINT_WAIVERS, "--top-module", TOP_NAME, str(path)]
+    result = subprocess.run(command, env=tool_env(), capture_output=True, text=True)
+    return result.returncode == 0, result.stderr

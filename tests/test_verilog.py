@@ -1,0 +1,108 @@
+"""``npstereo verilog``: generated text, lint, and the command line's error handling.
+
+``make test`` lints a handful of configurations covering every transform and the R = 1 and
+R = D/... corners; the full sweep of 24 configurations (block sizes 3..19, D in
+{16, 64, 100}, R in {1, 2, 4, 10}) runs in ``tests/bench_hdl.py``, which prints one line
+per configuration (generation time, lint result).
+"""
+
+import subprocess
+import sys
+
+import pytest
+
+from npstereo.gen import cli
+from npstereo.gen.verilog import TOP_NAME, core_verilog, lint
+from npstereo.golden.params import ParameterError, StereoParams
+
+QUICK = [
+    StereoParams(transform="census", block=3, disparities=16, rounds=1, width=24, height=8),
+    StereoParams(transform="rank", block=5, disparities=16, rounds=4, lr_threshold=None,
+                 width=24, height=8),
+    StereoParams(transform="ext-rank", block=3, disparities=16, rounds=2, aggregation=5,
+                 width=24, height=8),
+    StereoParams(transform="ext-census", block=3, disparities=16, rounds=16,
+                 aggregation=1, width=24, height=8),
+]
+
+
+@pytest.mark.parametrize("params", QUICK, ids=lambda p: p.describe().replace(" ", "_"))
+def test_generated_verilog_lints_clean(params, tmp_path):
+    path = tmp_path / "core.v"
+    path.write_text(core_verilog(params))
+    ok, messages = lint(path)
+    assert ok, messages[:2000]
+
+
+def test_header_records_parameters():
+    params = QUICK[1]
+    text = core_verilog(params)
+    head = text[:text.index("module")]
+    for fragment in ("transform=rank", "block=5", "disparities=16", "rounds=4",
+                     "aggregation=3", "lr_threshold=off", "width=24", "height=8", "Amaranth"):
+        assert fragment in head
+    assert f"module {TOP_NAME}(" in text
+    for port in ("s_axis_tdata", "s_axis_tvalid", "s_axis_tready", "s_axis_tuser",
+                 "s_axis_tlast", "m_axis_tdata", "m_axis_tvalid", "m_axis_tready",
+                 "m_axis_tuser", "m_axis_tlast", "framing_error", "clk", "rst"):
+        assert f" {port}" in text
+
+
+def test_lint_catches_broken_verilog(tmp_path):
+    """The lint check itself can fail: a width mismatch in a module is reported."""
+    path = tmp_path / "broken.v"
+    path.write_text(f"module {TOP_NAME}(input clk, output [3:0] y);\n"
+                    "  reg [3:0] r;\n  always @(posedge clk) r <= r + undeclared;\n"
+                    "  assign y = r;\nendmodule\n")
+    ok, _ = lint(path)
+    assert not ok
+
+
+def test_command_writes_file(tmp_path, capsys):
+    out = tmp_path / "core.v"
+    code = cli.main(["verilog", "--transform", "census", "--block", "3", "--disparities",
+                     "8", "--rounds", "2", "--width", "16", "--height", "4",
+                     "--out", str(out)])
+    assert code == 0
+    assert out.read_text().startswith("// npstereo_core")
+    assert [p.name for p in tmp_path.iterdir()] == ["core.v"]  # no temporary left
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--block", "4"], "block size"),
+    (["--disparities", "10", "--rounds", "3"], "rounds must divide"),
+    (["--disparities", "16", "--width", "16"], "image width"),
+    (["--height", "0"], "image height"),
+    (["--aggregation", "2"], "aggregation"),
+    (["--lr-threshold", "-1"], "lr threshold"),
+    (["--transform", "sad"], "invalid choice"),
+])
+def test_bad_parameters_exit_2_one_line(args, message, tmp_path):
+    out = tmp_path / "core.v"
+    base = {"--transform": "census", "--block": "3", "--disparities": "8",
+            "--width": "16", "--height": "4"}
+    for key, value in zip(args[::2], args[1::2]):
+        base[key] = value
+    argv = [sys.executable, "-m", "npstereo.gen.cli", "verilog", "--out", str(out)]
+    for key, value in base.items():
+        argv += [key, value]
+    result = subprocess.run(argv, capture_output=True, text=True)
+    assert result.returncode == 2
+    assert result.stderr.count("\n") == 1 and message in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_missing_size_is_rejected(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "npstereo.gen.cli", "verilog", "--out",
+                             str(tmp_path / "c.v")], capture_output=True, text=True)
+    assert result.returncode == 2 and "--width" in result.stderr
+    with pytest.raises(ParameterError, match="--width and --height"):
+        core_verilog(StereoParams(transform="census", block=3, disparities=8))
+
+
+def test_out_is_a_directory(tmp_path, capsys):
+    code = cli.main(["verilog", "--block", "3", "--disparities", "8", "--width", "16",
+                     "--height", "4", "--out", str(tmp_path)])
+    assert code == 2
+    assert "is a directory" in capsys.readouterr().err
