@@ -146,7 +146,7 @@ def pack_window(window):
     return sum(int(p) << (8 * i) for i, p in enumerate(window))
 
 
-def check_transform(params, every, seed, count=100):
+def check_transform(params, every, seed, count=100, en_probability=0.6):
     rng = np.random.default_rng(seed)
     windows = random_windows(params.block, count, rng)
     expected = [golden_window_value(w, params) for w in windows]
@@ -155,8 +155,16 @@ def check_transform(params, every, seed, count=100):
         dut, windows,
         lambda ctx, w: ctx.set(dut.window.as_value(), pack_window(w)),
         lambda ctx: ctx.get(dut.value),
-        expected, seed,
+        expected, seed, en_probability,
         garbage=lambda r: np.array([r.randrange(256) for _ in range(params.block ** 2)]))
+
+
+@pytest.mark.parametrize("en_probability", [1.0, 0.1])
+def test_transform_with_enable_always_or_rarely_high(en_probability):
+    # Back-to-back windows (every register loads each clock) and long stalls.
+    for transform in ("rank", "ext-census"):
+        check_transform(StereoParams(transform=transform, block=5), 1, seed=11, count=40,
+                        en_probability=en_probability)
 
 
 # (block, register spacing): every spacing, including combinational, and one large block.
