@@ -35,15 +35,28 @@ def aggregate(costs, size, rows=None, out=None, scratch=None):
     start, stop = (0, height) if rows is None else rows
     if out is None:
         out = np.empty((stop - start, width), dtype=costs.dtype)
+    if a == 0:
+        out[...] = costs[start:stop]
+        return out
+    # The first neighbour of each direction is added while copying (one pass less).
     horizontal = np.empty_like(costs) if scratch is None else scratch
-    horizontal[...] = costs
-    for i in range(1, a + 1):
+    np.add(costs[:, 1:], costs[:, :width - 1], out=horizontal[:, 1:])
+    horizontal[:, 0] = costs[:, 0]
+    horizontal[:, :width - 1] += costs[:, 1:]
+    for i in range(2, a + 1):
         horizontal[:, i:] += costs[:, :width - i]
         horizontal[:, :width - i] += costs[:, i:]
-    # Row y sums horizontal rows y - a .. y + a that exist; rows beyond the band are
-    # outside the image, so the clipped range is exact.
-    out[...] = horizontal[start:stop]
-    for j in range(1, a + 1):
+    # Row y sums the horizontal rows y - a .. y + a that exist; rows beyond the band are
+    # outside the image, so the clipped ranges are exact.
+    below = min(stop, height - 1)
+    if below > start:
+        np.add(horizontal[start:below], horizontal[start + 1:below + 1],
+               out=out[:below - start])
+    out[max(0, below - start):] = horizontal[max(start, below):stop]
+    above = max(start, 1)
+    if above < stop:
+        out[above - start:] += horizontal[above - 1:stop - 1]
+    for j in range(2, a + 1):
         below = min(stop, height - j)
         if below > start:
             out[:below - start] += horizontal[start + j:below + j]

@@ -30,44 +30,69 @@ class DisparityResult:
         self.right = right
 
 
+#: Bytes of transformed pixels per image that one cost computation reads: with its
+#: temporary, both images' rows stay in the L2 cache while all D disparities reuse them.
+_CHUNK_BYTES = 1 << 18
+#: Upper bound of one band's cost volume (D x rows x W), per worker thread.
+_VOLUME_BYTES = 1 << 24
+
+
 def _band_rows(params, height, width, workers=2):
     """Output rows per band.
 
-    About 1 MiB of transformed pixels per image keeps a band's per-disparity temporaries in
-    the L2/L3 caches; at least 16 rows per aggregation radius keeps the halo rows (whose
-    costs every band recomputes) cheap; at most a quarter of the rows per worker keeps
-    the threads evenly loaded.
+    As many as keep the band's cost volume below ``_VOLUME_BYTES`` (fewer bands recompute
+    fewer halo rows), but at most a quarter of the rows per worker, so that the threads
+    stay evenly loaded.
     """
-    bytes_per_row = max(1, params.transform_bits // 8) * width
-    rows = max((1 << 20) // bytes_per_row, 16 * params.agg_radius, 1)
+    volume_row = params.disparities * width * np.dtype(cost_dtype(params)).itemsize
+    rows = max(1, _VOLUME_BYTES // volume_row)
     return max(1, min(rows, -(-height // (4 * workers))))
+
+
+def _chunk_rows(params, width):
+    """Rows of one cost computation (see ``_CHUNK_BYTES``)."""
+    return max(1, _CHUNK_BYTES // (max(1, params.transform_bits // 8) * width))
+
+
+def _band_costs(left_t, right_t, params):
+    """Matching costs of a band for every disparity: (D, rows, W) of ``cost_dtype``.
+
+    Computed a few rows at a time for all disparities, so that the transformed rows are
+    read from the cache D times instead of from memory.
+    """
+    dtype = cost_dtype(params)
+    height, width = left_t.shape[-2:]
+    volume = np.empty((params.disparities, height, width), dtype)
+    step = _chunk_rows(params, width)
+    for y0 in range(0, height, step):
+        left, right = left_t[..., y0:y0 + step, :], right_t[..., y0:y0 + step, :]
+        if params.transform == "ext-census":
+            left_sums = np.add.reduce(left, axis=0, dtype=dtype)
+            right_sums = np.add.reduce(right, axis=0, dtype=dtype)
+            totals = np.empty(left_sums.shape, dtype)
+        for d in range(params.disparities):
+            extra = {}
+            if params.transform == "ext-census":
+                extra["totals"] = np.add(left_sums[:, d:], right_sums[:, :width - d],
+                                         out=totals[:, :width - d])
+            matching_costs(left, right, d, params, out=volume[d, y0:y0 + step], **extra)
+    return volume
 
 
 def _match_band(left_t, right_t, params, band, rows):
     """Raw left and right maps of the output rows ``rows`` of the image rows ``band``."""
-    left_t, right_t = left_t[..., band[0]:band[1], :], right_t[..., band[0]:band[1], :]
-    dtype = cost_dtype(params)
-    shape = left_t.shape[-2:]
-    width = shape[1]
-    costs, scratch = np.empty(shape, dtype), np.empty(shape, dtype)
-    aggregated = np.empty((rows[1] - rows[0], width), dtype)
-    if params.transform == "ext-census":
-        left_sums = np.add.reduce(left_t, axis=0, dtype=dtype)
-        right_sums = np.add.reduce(right_t, axis=0, dtype=dtype)
-        totals = np.empty(shape, dtype)
-    right_wta = RightWTA(aggregated.shape, dtype)
+    volume = _band_costs(left_t[..., band[0]:band[1], :], right_t[..., band[0]:band[1], :],
+                         params)
+    scratch = np.empty(volume.shape[1:], volume.dtype)
+    aggregated = np.empty((rows[1] - rows[0], volume.shape[2]), volume.dtype)
+    right_wta = RightWTA(aggregated.shape, volume.dtype)
     partition_results = []
     for k in range(params.rounds):
         first = k * params.per_round
 
         def partition_costs():
             for d in range(first, first + params.per_round):
-                extra = {}
-                if params.transform == "ext-census":
-                    extra["totals"] = np.add(left_sums[:, d:], right_sums[:, :width - d],
-                                             out=totals[:, :width - d])
-                cost = matching_costs(left_t, right_t, d, params, out=costs, **extra)
-                summed = aggregate(cost, params.aggregation, rows, out=aggregated,
+                summed = aggregate(volume[d], params.aggregation, rows, out=aggregated,
                                    scratch=scratch)
                 right_wta.update(summed, d)
                 yield summed

@@ -24,7 +24,8 @@ class _Winner:
     def update(self, cost, disparity, mask):
         """Take ``cost``/``disparity`` where they beat the current winner (``mask``: scratch)."""
         _better(cost, self.cost, out=mask)
-        np.copyto(self.cost, cost, where=mask)
+        # The best cost is the minimum whichever equal candidate wins the tie.
+        np.minimum(self.cost, cost, out=self.cost)
         np.copyto(self.disparity, disparity, where=mask)
 
 
