@@ -20,8 +20,8 @@ __all__ = ["add_parser", "run", "golden_demo"]
 def golden_demo(out, block=9, seed=0):
     """Golden-model disparity maps of the default synthetic scene for every transform.
 
-    Writes ``left.png``, ``right.png``, ``ground_truth.png``, ``<transform>.png`` and
-    ``golden.json`` into ``out``.
+    Writes ``left.png``, ``right.png``, ``ground_truth.png``, ``<transform>.png``,
+    ``golden.json`` and ``summary.md`` into ``out``.
 
     Returns
     -------
@@ -46,6 +46,15 @@ def golden_demo(out, block=9, seed=0):
         save_disparity_png(out / f"{transform}.png", disparity, top)
     write_text(out / "golden.json", json.dumps({"scene": pair.name, "results": rows}, indent=1)
                + "\n")
+    lines = [f"# Golden model on {pair.name}", "",
+             f"{block}x{block} transform, D = {DEFAULT_DISPARITIES}, 3x3 aggregation, L/R "
+             "check T = 3. Correct = |d - gt| <= 1 over pixels with x >= D.", "",
+             "| transform | correct (%) | density (%) | error rate (%) | map |",
+             "|---|---:|---:|---:|---|"]
+    lines += [f"| {r['transform']} | {r['correct']:.2f} | {r['density']:.2f} | "
+              f"{r['error_rate']:.2f} | ![{r['transform']}]({r['transform']}.png) |" for r in rows]
+    lines += ["", "Ground truth: ![ground truth](ground_truth.png)", ""]
+    write_text(out / "summary.md", "\n".join(lines))
     return rows
 
 
@@ -59,7 +68,7 @@ def run(args):
     for row in rows:
         print(f"  {row['transform']:<11} correct {row['correct']:6.2f}%  "
               f"density {row['density']:6.2f}%  error rate {row['error_rate']:5.2f}%")
-    print(f"disparity PNGs and golden.json in {args.out}")
+    print(f"disparity PNGs, summary.md and golden.json in {args.out}")
 
 
 def add_parser(subparsers):

@@ -225,6 +225,20 @@ def test_demo_writes_maps_and_summary(capsys, tmp_path):
     for name in ("left", "right", "ground_truth", "rank", "census", "ext-rank", "ext-census"):
         assert (out / f"{name}.png").stat().st_size > 0
     assert "census" in capsys.readouterr().out
+    assert "| ext-census |" in (out / "summary.md").read_text()
+
+
+def test_eval_in_parallel_processes_gives_the_same_numbers(capsys, tmp_path, pair_files):
+    _, _, scene = pair_files
+    rows = {}
+    for jobs in ("1", "2"):
+        path = tmp_path / f"j{jobs}.json"
+        assert main(["eval", "--dataset", str(scene), "--transform", "rank", "ext-census",
+                     "--block", "3", "--disparities", str(D), "--jobs", jobs,
+                     "--json", str(path)]) == 0
+        rows[jobs] = [(r["transform"], r["correct"], r["density"])
+                      for r in json.loads(path.read_text())]
+    assert rows["1"] == rows["2"] and len(rows["1"]) == 2
 
 
 def test_console_script_error_has_no_traceback(tmp_path):
