@@ -6,11 +6,13 @@ Builds are cached per configuration under ``build/cosim/<hash>/`` and shared by 
 of one configuration, so each Verilator model is compiled once (without C++ optimisation:
 the frames are tiny). Frames are 40 x 12.
 
-Icarus Verilog currently fails every run: the generated Verilog declares the memory
-read-data registers without an initial value, Icarus starts them at X, and the X reaches
-``m_axis_tdata`` (Verilator, being two-state, starts them at 0). These tests are marked
-as strict expected failures: the marker must go when the core no longer depends on
-uninitialised read data.
+Icarus Verilog currently fails every run, for two reasons in the generated Verilog (the
+test bench itself gives identical results on both simulators with a stand-in core):
+the memory read-data registers (``reg [..] _0_;``) have no initial value, Icarus starts
+them at X and the X reaches ``m_axis_tdata``; and with those registers initialised to 0 by
+hand, Icarus still disagrees with Verilator, Amaranth's simulator and the golden model
+(census 5x5 D=8 R=2: 252 of 480 pixels differ, first at x=8 y=0). These tests are marked
+as strict expected failures: the marker must go once the core simulates correctly there.
 """
 
 import numpy as np
@@ -30,7 +32,8 @@ WIDTH, HEIGHT = 40, 12
 # harness records X words as mismatches: AssertionError.
 ICARUS_X = pytest.mark.xfail(
     raises=(cosim.CosimError, AssertionError), strict=True,
-    reason="memory read registers start at X in Icarus and the X reaches m_axis_tdata")
+    reason="generated core is not bit-exact under Icarus (X from uninitialised memory "
+           "read registers, and mismatches beyond that); see docs/cosim.md")
 
 
 def frames(params, count=2, seed=0):
