@@ -60,6 +60,7 @@ class NpStereoCore(wiring.Component):
 
     def __init__(self, params, every=DEFAULT_EVERY):
         if params.width is None or params.height is None:
+            self._MustUse__silence = True  # never elaborated: no "unused" warning
             raise ParameterError("the hardware needs the image size: give width and height")
         self.params = params
         self.input_stage = InputStage(params)
