@@ -28,7 +28,10 @@ def _census_cost(left, right, out):
 def _ext_census_cost(left, right, out, totals):
     # sum |u - v| = sum u + sum v - 2 sum min(u, v): one uint8 pass over the k bytes instead
     # of three (max, min, subtract); the byte sums are computed once, not once per d.
-    np.add.reduce(np.minimum(left, right), axis=0, dtype=out.dtype, out=out)
+    # Summing over the last axis is fast when each pixel's k bytes are contiguous, as
+    # transform.ext_census stores them.
+    smaller = np.minimum(left.transpose(1, 2, 0), right.transpose(1, 2, 0))
+    np.add.reduce(smaller, axis=-1, dtype=out.dtype, out=out)
     out *= out.dtype.type(2)
     np.subtract(totals, out, out=out)
 
