@@ -95,10 +95,19 @@ def ext_census(image, block):
     """
     image = np.asarray(image, dtype=np.uint8)
     k = block * block - 1
-    planes = np.empty((k,) + image.shape, dtype=np.uint8)
-    for n, plane in neighbour_planes(image, block):
-        _absolute_difference(image, plane, planes[n])
-    return np.ascontiguousarray(planes.transpose(1, 2, 0)).transpose(2, 0, 1)
+    height, width = image.shape
+    out = np.empty((height, width, k), dtype=np.uint8)
+    # Plane by plane is the fast way to compute; a few rows at a time keeps the planes in
+    # the cache until they are transposed into place.
+    rows = 32
+    planes = np.empty((k, rows, width), dtype=np.uint8)
+    neighbours = [plane for _, plane in neighbour_planes(image, block)]
+    for y0 in range(0, height, rows):
+        y1 = min(height, y0 + rows)
+        for n, plane in enumerate(neighbours):
+            _absolute_difference(image[y0:y1], plane[y0:y1], planes[n, :y1 - y0])
+        out[y0:y1] = planes[:, :y1 - y0].transpose(1, 2, 0)
+    return out.transpose(2, 0, 1)
 
 
 _TRANSFORMS = {"rank": rank, "census": census, "ext-rank": ext_rank, "ext-census": ext_census}

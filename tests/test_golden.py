@@ -167,13 +167,16 @@ def test_disparity_map_matches_reference(name, block, disparities, aggregations,
 
 
 def test_disparity_map_of_wide_aggregation_and_band_seams(monkeypatch):
-    """A = 7 and bands of 4 rows: aggregation windows span band boundaries."""
+    """A = 7, bands of 4 rows, cost chunks of 1 row, 1 or 3 threads: nothing may change."""
     monkeypatch.setattr(golden_pipeline, "_band_rows", lambda *args: 4)
+    monkeypatch.setattr(golden_pipeline, "_CHUNK_BYTES", 1)
     left, right = make_pair("levels", 11, 24, seed=7)
-    expected = reference.disparity_map(left, right, "census", 5, 6, aggregation=7)
-    for rounds in (1, 3):
-        got = golden_map(left, right, "census", 5, 6, rounds, 7, 3)
-        np.testing.assert_array_equal(got, expected)
+    for name in ("census", "ext-census"):
+        expected = reference.disparity_map(left, right, name, 5, 6, aggregation=7)
+        params = StereoParams(transform=name, block=5, disparities=6, rounds=3, aggregation=7)
+        for threads in (1, 3):
+            got = golden_pipeline.disparity_map(left, right, params, threads=threads)
+            np.testing.assert_array_equal(got.disparity, expected)
 
 
 def test_disparity_map_of_one_block_9_ext_census():
