@@ -150,7 +150,8 @@ def build(simulator, sources, top, build_root=None, optimize=True):
     use_project_tools()
     args = VERILATOR_ARGS if simulator == "verilator" else []
     # Code that runs once (construction, initial blocks) is not worth optimising.
-    makeflags = VERILATOR_MAKEFLAGS + " OPT_SLOW=-O0" + ("" if optimize else " OPT_FAST=-O0")
+    makeflags = VERILATOR_MAKEFLAGS + (" OPT_SLOW=-O0" if optimize else
+                                       " OPT_FAST=-O0 OPT_SLOW=-O0")
     key = hashlib.sha256(json.dumps([simulator, top, args, makeflags, sorted(sources.items())])
                          .encode()).hexdigest()[:16]
     directory = Path(build_root or default_build_root()) / key
