@@ -113,7 +113,8 @@ class LRCheck(wiring.Component):
             m.d.sync += [waiting[0].tag.eq(self.tag), waiting[0].d.eq(self.disparity)]
             m.d.sync += [waiting[k].eq(waiting[k - 1]) for k in range(1, depth + 1)]
         entry = waiting[depth]
-        partner = Array(final)[entry.d]
+        # Padded to every index value so that the multiplexer is a complete case.
+        partner = Array(final + final[-1:] * (2 ** d_bits - depth))[entry.d]
         difference = Mux(entry.d > partner, entry.d - partner, partner - entry.d)
         keep = (entry.tag.x >= entry.d) & (difference <= p.lr_threshold)
         inside = self._report(m, entry.tag, entry.d, keep)

@@ -67,6 +67,7 @@ MATRIX = [
     ("ext-rank", 5, 16, 1, 5, None, "random"),
     ("ext-census", 3, 16, 2, 1, 1, "random"),
     ("ext-census", 5, 8, 4, 3, None, "scene"),
+    ("census", 3, 12, 3, 3, 1, "scene"),  # D not a power of two
 ]
 
 

@@ -1,7 +1,7 @@
 """``npstereo verilog``: generated text, lint, and the command line's error handling.
 
-``make test`` lints a handful of configurations covering every transform and the R = 1 and
-R = D/... corners; the full sweep of 24 configurations (block sizes 3..19, D in
+``make test`` lints five configurations covering every transform, R = 1 and R = D, and a
+disparity range that is not a power of two; the full sweep of 24 configurations (block sizes 3..19, D in
 {16, 64, 100}, R in {1, 2, 4, 10}) runs in ``tests/bench_hdl.py``, which prints one line
 per configuration (generation time, lint result).
 """
@@ -21,6 +21,7 @@ QUICK = [
                  width=24, height=8),
     StereoParams(transform="ext-rank", block=3, disparities=16, rounds=2, aggregation=5,
                  width=24, height=8),
+    StereoParams(transform="census", block=3, disparities=12, rounds=3, width=24, height=8),
     StereoParams(transform="ext-census", block=3, disparities=16, rounds=16,
                  aggregation=1, width=24, height=8),
 ]
