@@ -7,11 +7,11 @@ their quality); later stages (Verilog generation, co-simulation) extend :func:`r
 import json
 from pathlib import Path
 
-from ..golden.params import TRANSFORMS, StereoParams, UserError
+from ..golden.params import TRANSFORMS, StereoParams
 from ..golden.quality import evaluate
 from ..golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
 from .atomic import write_text
-from .cmd_match import match_images
+from .cmd_match import check_output_folder, match_images, output_errors
 from .plots import save_disparity_png, save_gray_png
 
 __all__ = ["add_parser", "run", "golden_demo"]
@@ -59,10 +59,10 @@ def golden_demo(out, block=9, seed=0):
 
 
 def run(args):
-    if Path(args.out).exists() and not Path(args.out).is_dir():
-        raise UserError(f"--out {args.out} exists and is not a folder")
+    check_output_folder(args.out)
     StereoParams(block=args.block, disparities=DEFAULT_DISPARITIES)
-    rows = golden_demo(args.out, block=args.block, seed=args.seed)
+    with output_errors():
+        rows = golden_demo(args.out, block=args.block, seed=args.seed)
     print(f"golden model on the synthetic scene (seed {args.seed}), {args.block}x{args.block} "
           f"transform, D={DEFAULT_DISPARITIES}, 3x3 aggregation, L/R check T=3:")
     for row in rows:

@@ -18,7 +18,7 @@ from ..golden.params import UserError
 from ..golden.quality import evaluate
 from ..golden.synthetic import synthetic_pair
 from .atomic import write_text
-from .cmd_match import add_matching_arguments, match_images, params_from_args
+from .cmd_match import add_matching_arguments, match_images, output_errors, params_from_args
 
 __all__ = ["add_parser", "run", "Condition", "condition_images", "run_jobs", "format_table"]
 
@@ -148,7 +148,8 @@ def run(args):
           f"{condition.label}")
     print(format_table(rows))
     if args.json is not None:
-        write_text(args.json, json.dumps(rows, indent=1) + "\n")
+        with output_errors():
+            write_text(args.json, json.dumps(rows, indent=1) + "\n")
 
 
 def add_condition_arguments(parser):

@@ -3,6 +3,8 @@
 Also home of the stereo-parameter options shared by ``eval``, ``paper`` and ``demo``.
 """
 
+import contextlib
+import os
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +16,7 @@ from .atomic import atomic_path
 from .plots import save_disparity_png
 
 __all__ = ["add_parser", "run", "add_matching_arguments", "params_from_args", "match_images",
-           "save_raw"]
+           "save_raw", "output_errors", "check_output_folder"]
 
 
 def add_matching_arguments(parser, many=False):
@@ -65,12 +67,36 @@ def save_raw(path, disparity):
         np.save(handle, np.asarray(disparity, dtype=np.int16))
 
 
+@contextlib.contextmanager
+def output_errors():
+    """Report a failed write (read-only folder, a file where a folder should be) as a
+    one-line UserError instead of a traceback."""
+    try:
+        yield
+    except OSError as error:
+        target = error.filename or "the output"
+        raise UserError(f"cannot write {target}: {error.strerror or error}") from None
+
+
+def check_output_folder(value, option="--out"):
+    """Fail before any work when the folder ``value`` cannot be created or written."""
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise UserError(f"{option} {value} exists and is not a folder")
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
+        raise UserError(f"{option} {value} cannot be created: {existing} is not a writable "
+                        "folder")
+    return path
+
+
 def _output_path(value, suffix, option):
     path = Path(value)
     if path.suffix.lower() != suffix:
         raise UserError(f"{option} must name a {suffix} file, not {value}")
     if path.is_dir():
         raise UserError(f"{option} {value} is a directory")
+    check_output_folder(path.parent, option)
     return path
 
 
@@ -81,9 +107,10 @@ def run(args):
     left = read_image(args.left, "left image")
     right = read_image(args.right, "right image")
     disparity = match_images(left, right, params)
-    save_disparity_png(out, disparity, params.disparities - 1)
-    if raw is not None:
-        save_raw(raw, disparity)
+    with output_errors():
+        save_disparity_png(out, disparity, params.disparities - 1)
+        if raw is not None:
+            save_raw(raw, disparity)
     valid = disparity >= 0
     print(f"{params.describe()}: {left.shape[1]}x{left.shape[0]}, "
           f"{100.0 * valid.mean():.1f}% valid -> {out}" + (f", {raw}" if raw else ""))

@@ -17,6 +17,7 @@ from ..golden.quality import evaluate
 from ..golden.synthetic import synthetic_pair
 from .atomic import write_text
 from .cmd_eval import Condition, condition_images, run_jobs
+from .cmd_match import check_output_folder, output_errors
 from .plots import disparity_grid, plot_series, save_disparity_png
 
 __all__ = ["add_parser", "run", "PAPER_FIG6", "PAPER_FIG8", "BLOCKS", "paper_sweep"]
@@ -127,8 +128,7 @@ def run(args):
     blocks = tuple(args.blocks)
     if not args.noise > 0:
         raise UserError(f"--noise must be a variance > 0, not {args.noise}")
-    if Path(args.out).exists() and not Path(args.out).is_dir():
-        raise UserError(f"--out {args.out} exists and is not a folder")
+    check_output_folder(args.out)
     for b in blocks:
         StereoParams(block=b, disparities=args.disparities)
     pair = synthetic_pair(disparities=args.disparities) if args.synthetic else \
@@ -142,7 +142,12 @@ def run(args):
                        Condition(bayer=True, gains=BAYER_GAINS, read_noise=BAYER_READ_NOISE,
                                  seed=args.seed)]
     rows, maps = paper_sweep(pair, conditions, blocks, args.disparities, args.jobs)
+    with output_errors():
+        _write_report(args, pair, conditions, blocks, rows, maps)
 
+
+def _write_report(args, pair, conditions, blocks, rows, maps):
+    """README.md, plots, Fig. 12 grid and results.json of a finished sweep."""
     # Compare with the paper only for its own configuration (teddy blocks 7..19, D=100).
     is_paper = blocks == BLOCKS and args.disparities == 100 and not args.synthetic
     out = Path(args.out)

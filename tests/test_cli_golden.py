@@ -112,6 +112,8 @@ def test_match_bad_inputs(capsys, tmp_path, pair_files):
         (["match", str(left), str(right), "--lr-threshold", "2", "--no-lr-check"] + common,
          "not allowed"),
         (["match", str(left)] + common, "required"),
+        (["match", str(left), str(right), "--disparities", str(D), "--out",
+          str(junk / "d.png")], "not a folder"),
     ]
     for argv, word in cases:
         assert_user_error(capsys, tmp_path, argv, word)
@@ -210,6 +212,8 @@ def test_paper_and_demo_bad_inputs(capsys, tmp_path):
         (["paper", "--synthetic", "--out", str(tmp_path / "p"), "--jobs", "-2"], "--jobs"),
         (["demo", "--out", str(a_file)], "not a folder"),
         (["demo", "--out", str(tmp_path / "d"), "--block", "2"], "block"),
+        (["demo", "--out", str(a_file / "d")], "not a writable folder"),
+        (["paper", "--synthetic", "--out", str(a_file / "p")], "not a writable folder"),
     ]
     for argv, word in cases:
         assert_user_error(capsys, tmp_path, argv, word)
