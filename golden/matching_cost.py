@@ -21,8 +21,10 @@ def _rank_cost(left, right, out):
 
 
 def _census_cost(left, right, out):
-    ones = np.bitwise_count(left ^ right)
-    np.add.reduce(ones, axis=0, dtype=out.dtype, out=out)
+    ones = np.bitwise_count(np.bitwise_xor(left, right))
+    # Up to 3 words (192 bits) the count fits uint8: add without widening, widen once.
+    total = np.add.reduce(ones, axis=0, dtype=np.uint8 if len(ones) <= 3 else out.dtype)
+    np.copyto(out, total)
 
 
 def _ext_census_cost(left, right, out, totals):

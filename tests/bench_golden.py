@@ -77,7 +77,7 @@ def main(argv=None):
         wall, cpu = time_config(left, right, params, args.runs, args.threads)
         goal = "" if target is None else f"  (target <= {target:g} s wall: " \
             f"{'ok' if wall <= target else 'MISSED'})"
-        print(f"  {params.describe():32s} {wall:7.3f} s/frame wall {cpu:7.3f} s CPU{goal}",
+        print(f"  {params.describe():36s} {wall:7.3f} s/frame wall {cpu:7.3f} s CPU{goal}",
               flush=True)
     print(f"load average at the end {os.getloadavg()[0]:.1f}")
     return 0

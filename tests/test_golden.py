@@ -99,7 +99,7 @@ def test_transform_of_image_smaller_than_window():
 
 @pytest.mark.parametrize("name", TRANSFORMS)
 @pytest.mark.parametrize("block,aggregation,kind", [(3, 3, "levels"), (5, 1, "random"),
-                                                    (7, 5, "saturated")])
+                                                    (7, 5, "saturated"), (17, 3, "random")])
 def test_costs_and_aggregation_match_reference(name, block, aggregation, kind):
     left, right = make_pair(kind, 9, 21, seed=block + aggregation)
     disparities = 6
