@@ -2,8 +2,10 @@
 
 Stages in hardware order: transformation, matching costs, aggregation, WTA per partition
 (calculation stage), WTA across partitions (evaluation stage), left/right consistency check.
-The image is processed in bands of rows (each with the aggregation's halo) so that the
-working set stays in cache; bands run in parallel threads (numpy releases the GIL).
+The image is processed in bands of rows (each with the aggregation's halo) whose cost
+volume is bounded in size and computed a few rows at a time so that the working set stays
+in cache; bands run in parallel threads (numpy releases the GIL). docs/golden-model.md
+explains the choices; none of them changes a bit of the result.
 """
 
 import os
