@@ -97,25 +97,34 @@ def test_transform_of_image_smaller_than_window():
 # Matching costs and aggregation -----------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", TRANSFORMS)
-@pytest.mark.parametrize("block,aggregation,kind", [(3, 3, "levels"), (5, 1, "random"),
-                                                    (7, 5, "saturated"), (17, 3, "random")])
-def test_costs_and_aggregation_match_reference(name, block, aggregation, kind):
-    left, right = make_pair(kind, 9, 21, seed=block + aggregation)
-    disparities = 6
+def stage_mismatches(name, block, aggregation, kind):
+    """(stage, d) of every disparity whose golden costs or aggregated costs differ."""
+    height, width, disparities = 9, 21, 6
+    left, right = make_pair(kind, height, width, seed=block + aggregation)
     params = StereoParams(transform=name, block=block, disparities=disparities,
                           aggregation=aggregation)
     volume = reference.cost_volume(left, right, name, block, disparities)
     aggregated = reference.aggregate(volume, aggregation)
     left_t = golden_transform.transform(left, params)
     right_t = golden_transform.transform(right, params)
+    mismatches = []
     for d in range(disparities):
         costs = golden_cost.matching_costs(left_t, right_t, d, params)
-        expected = np.array([[volume[y][x][d] for x in range(21)] for y in range(9)])
-        np.testing.assert_array_equal(costs, expected, err_msg=f"costs at d={d}")
-        expected = np.array([[aggregated[y][x][d] for x in range(21)] for y in range(9)])
-        np.testing.assert_array_equal(golden_aggregation.aggregate(costs, aggregation),
-                                      expected, err_msg=f"aggregated costs at d={d}")
+        expected = np.array([[volume[y][x][d] for x in range(width)] for y in range(height)])
+        if not np.array_equal(costs, expected):
+            mismatches.append(("costs", d))
+        expected = np.array([[aggregated[y][x][d] for x in range(width)]
+                             for y in range(height)])
+        if not np.array_equal(golden_aggregation.aggregate(costs, aggregation), expected):
+            mismatches.append(("aggregated", d))
+    return mismatches
+
+
+@pytest.mark.parametrize("name", TRANSFORMS)
+@pytest.mark.parametrize("block,aggregation,kind", [(3, 3, "levels"), (5, 1, "random"),
+                                                    (7, 5, "saturated"), (17, 3, "random")])
+def test_costs_and_aggregation_match_reference(name, block, aggregation, kind):
+    assert stage_mismatches(name, block, aggregation, kind) == []
 
 
 # The whole disparity map ------------------------------------------------------------------
@@ -226,6 +235,19 @@ def test_broken_padding_is_caught(monkeypatch):
     assert broken_case_differs()
     image, _ = make_pair("flat", 8, 9, seed=1)
     assert transform_mismatches(image, "ext-census", 3)
+
+
+def test_broken_costs_are_caught(monkeypatch):
+    """Census bits combined with OR instead of XOR, ext-census without the factor 2."""
+    monkeypatch.setitem(golden_cost._COSTS, "census", lambda left, right, out: np.copyto(
+        out, np.bitwise_count(left | right).sum(axis=0)))
+    assert stage_mismatches("census", 3, 3, "levels")
+
+    def half(left, right, out, totals):
+        np.add.reduce(np.minimum(left, right), axis=0, dtype=out.dtype, out=out)
+        np.subtract(totals, out, out=out)
+    monkeypatch.setattr(golden_cost, "_ext_census_cost", half)
+    assert stage_mismatches("ext-census", 3, 3, "levels")
 
 
 def test_broken_aggregation_border_is_caught(monkeypatch):
