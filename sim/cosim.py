@@ -129,8 +129,19 @@ class Build:
         return self.directory / "sim"
 
     def runner(self):
-        from cocotb_tools.runner import get_runner
-        return get_runner(self.simulator)
+        from cocotb_tools.runner import Verilator, get_runner
+        if self.simulator != "verilator" or self.top != HARNESS_TOP:
+            return get_runner(self.simulator)
+
+        class HarnessVerilator(Verilator):
+            """cocotb's Verilator runner without ``--public-flat-rw``: the harness marks
+            its own ports public, and a fully public core loses most optimisations."""
+
+            def _build_command(self):
+                commands = super()._build_command()
+                commands[0] = [arg for arg in commands[0] if arg != "--public-flat-rw"]
+                return commands
+        return HarnessVerilator()
 
 
 def build(simulator, sources, top, build_root=None, optimize=True):
