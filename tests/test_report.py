@@ -169,3 +169,16 @@ def test_cli_single_configuration(tmp_path, capsys):
     result = document["reports"][0]["results"]["cyclonev"]
     # Only the two image line buffers (A = 1: no cost lines): 2 x 16 columns x 2 lines x 8.
     assert result["memory_bits"] == 2 * 16 * 2 * 8
+
+
+def test_sweep_outputs_ratios_and_plots(tmp_path):
+    ok = {"target": "cyclonev", "status": "ok", "logic": 5087, "registers": 100,
+          "block_rams": 3, "memory_bits": 557056 * 2, "fmax_mhz": None, "seconds": 1.0}
+    report = {"params": {"transform": "rank", "block": 7}, "results": {"cyclonev": ok}}
+    text = cmd_report.sweep_markdown([report])
+    # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
+    assert "| rank | 7x7 | 5,087 | 10,174 | 0.50 |" in text and "| 2.00 |" in text
+    from PIL import Image
+    written = cmd_report.sweep_plots([report], tmp_path)
+    assert [p.name for p in written] == ["logic.png", "memory.png"]
+    assert all(Image.open(p).size[0] > 100 for p in written)
