@@ -6,7 +6,7 @@ extended rank: |TL - TR|), ``_census_cost`` (popcount of TL xor TR) and ``_ext_c
 caller's business, as in the golden model where it happens outside these functions.
 """
 
-from amaranth.hdl import Module, unsigned
+from amaranth.hdl import Module, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -64,7 +64,10 @@ class MatchingCost(wiring.Component):
         return build_tree(m, self.en, [(value,)], None, plan)[0]
 
     def _census_cost(self, m):
-        differing = self.left ^ self.right
+        # A named signal: slicing a bare expression would copy the whole wide XOR into
+        # every one of the k bit selects, which makes elaboration quadratic in k.
+        differing = Signal(self.params.neighbours)
+        m.d.comb += differing.eq(self.left ^ self.right)
         bits = [differing[n] for n in range(self.params.neighbours)]
         # One LUT level in front of the compressors, far shorter than an adder level: not
         # counted against the register spacing.
