@@ -221,7 +221,7 @@ def test_paper_and_demo_bad_inputs(capsys, tmp_path):
 
 def test_demo_writes_maps_and_summary(capsys, tmp_path):
     out = tmp_path / "demo"
-    assert main(["demo", "--out", str(out), "--block", "7"]) == 0
+    assert main(["demo", "--out", str(out), "--block", "7", "--no-hardware"]) == 0
     summary = json.loads((out / "golden.json").read_text())
     assert [r["transform"] for r in summary["results"]] == [
         "rank", "census", "ext-rank", "ext-census"]
