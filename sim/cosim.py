@@ -43,6 +43,13 @@ VERILATOR_ARGS = [*VERILATOR_WAIVERS, "-Wno-fatal", "-O3"]
 #: ``-MAKEFLAGS`` only reaches a make that verilator starts), so the definition goes in
 #: through make's own environment variable, where it counts as a command-line override.
 VERILATOR_MAKEFLAGS = "CFG_CXXFLAGS_PCH_I=-include"
+# Yosys' Verilog (Amaranth's back end) wakes its `always @*` blocks at time 0 through a
+# register whose declaration initialiser changes it from X to 0. Under IEEE 1800 semantics,
+# which cocotb's runner selects with -g2012, a declaration initialiser is no event, so
+# Icarus never evaluates combinational blocks whose inputs stay constant and their outputs
+# stay X (or stale). The later -g2005 wins over the runner's -g2012 and restores Verilog
+# semantics; the harness and the core are plain Verilog-2005.
+ICARUS_ARGS = ["-g2005"]
 
 
 class CosimError(RuntimeError):
@@ -159,7 +166,7 @@ def build(simulator, sources, top, build_root=None, optimize=True):
         raise ValueError(f"simulator must be one of {', '.join(SIMULATORS)}")
     require("iverilog" if simulator == "icarus" else "verilator")
     use_project_tools()
-    args = VERILATOR_ARGS if simulator == "verilator" else []
+    args = VERILATOR_ARGS if simulator == "verilator" else ICARUS_ARGS
     # Code that runs once (construction, initial blocks) is not worth optimising.
     makeflags = VERILATOR_MAKEFLAGS + (" OPT_SLOW=-O0" if optimize else
                                        " OPT_FAST=-O0 OPT_SLOW=-O0")
