@@ -71,7 +71,7 @@ class CalculationStage(wiring.Component):
         self.position_latency = self.transform_left.latency + 1
         #: Clocks from the position register to the outputs of the same round: costs,
         #: vertical (memory read), horizontal (a positions and a register), minimum tree.
-        self.round_latency = (self.cost_units[0].latency + (1 if a else 0)
+        self.round_latency = (self.cost_units[0].latency + (3 if a else 0)
                               + (a * rounds + 1 if a else 0) + self.min_tree.latency)
         #: The output tag is the centre of the aggregation window, a rows and a columns
         #: behind the newest costs.
@@ -158,14 +158,18 @@ class CalculationStage(wiring.Component):
         rd = lines.read_port(domain="sync")
         wr = lines.write_port()
         m.d.comb += [rd.addr.eq(tag.x * p.rounds + tag.round), rd.en.eq(self.en)]
-        held = [Signal(bits, name=f"vertical_in{i}") for i in range(per_round)]
-        held_tag = Signal(tag_layout(p))
-        with m.If(self.en):
-            m.d.sync += [h.eq(c) for h, c in zip(held, costs)] + [held_tag.eq(tag)]
+        # Three registers, for the clock: the block RAM's read register, its data again
+        # (the RAM's clock-to-output alone is a third of a cycle), and the column sums,
+        # so that neither the RAM nor the adders reach into the horizontal sum. The
+        # write-back lands two clocks after the read; the same address is read again only
+        # a row (W * R clocks > 2) later, so no read can see a stale word.
+        read = delay(m, self.en, rd.data, 1, "cost_lines_data")
+        held = [delay(m, self.en, c, 2, f"vertical_in{i}") for i, c in enumerate(costs)]
+        held_tag = delay(m, self.en, tag, 2, "vertical_tag")
 
         def stored(row, i):  # row 0 = the row above held_tag.y
             start = (row * per_round + i) * bits
-            return rd.data[start:start + bits]
+            return read[start:start + bits]
 
         sums = []
         for i in range(per_round):
@@ -178,8 +182,12 @@ class CalculationStage(wiring.Component):
             wr.data.eq(Cat(*held, *[stored(row, i) for row in range(rows - 1)
                                     for i in range(per_round)])),
         ]
+        registered = [Signal(len(total), name=f"vertical{i}") for i, total in enumerate(sums)]
         out_tag = Signal(tag_layout(p))
-        m.d.comb += [out_tag.eq(held_tag), out_tag.y.eq(held_tag.y - a)]
+        with m.If(self.en):
+            m.d.sync += [r.eq(total) for r, total in zip(registered, sums)]
+            m.d.sync += [out_tag.eq(held_tag), out_tag.y.eq(held_tag.y - a)]
+        sums = registered
         return sums, out_tag
 
     def _horizontal(self, m, vertical, tag):
