@@ -21,7 +21,7 @@ from ..golden.synthetic import synthetic_pair
 from .cmd_match import add_matching_arguments, params_from_args
 from .plots import save_disparity_png
 
-__all__ = ["add_parser", "run", "parse_crop"]
+__all__ = ["add_parser", "run", "parse_crop", "print_verdict"]
 
 SIMULATORS = ("verilator", "icarus", "amaranth")
 
@@ -98,15 +98,20 @@ def run(args):
     hardware_png, golden_png = out / "hardware.png", out / "golden.png"
     save_disparity_png(hardware_png, hardware, params.disparities - 1)
     save_disparity_png(golden_png, golden, params.disparities - 1)
-    fps = args.clock_mhz * 1e6 / cycles if cycles > 0 else 0.0
+    print_verdict(comparison, cycles, pixels, args.clock_mhz)
+    print(f"time:             {seconds:.1f} s ({build_seconds:.1f} s building)")
+    print(f"maps:             {hardware_png} (hardware), {golden_png} (golden)")
+    return 0 if comparison.ok else 1
+
+
+def print_verdict(comparison, cycles, pixels, clock_mhz=100.0):
+    """The co-simulation verdict: pixels compared, mismatches, cycles and frame rate."""
+    fps = clock_mhz * 1e6 / cycles if cycles > 0 else 0.0
     verdict = "bit-exact" if comparison.ok else comparison.message()
     print(f"pixels compared:  {comparison.pixels}")
     print(f"mismatches:       {comparison.mismatches} ({verdict})")
     print(f"cycles per frame: {cycles} ({cycles / pixels:.2f} per pixel)")
-    print(f"frame rate:       {fps:.1f} frames/s at {args.clock_mhz:g} MHz")
-    print(f"time:             {seconds:.1f} s ({build_seconds:.1f} s building)")
-    print(f"maps:             {hardware_png} (hardware), {golden_png} (golden)")
-    return 0 if comparison.ok else 1
+    print(f"frame rate:       {fps:.1f} frames/s at {clock_mhz:g} MHz")
 
 
 def add_parser(subparsers):

@@ -12,6 +12,7 @@ from ..golden.params import TRANSFORMS, StereoParams
 from ..golden.quality import evaluate
 from ..golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
 from .atomic import write_text
+from .cmd_cosim import print_verdict
 from .cmd_match import check_output_folder, match_images, output_errors
 from .plots import save_disparity_png, save_gray_png
 
@@ -103,13 +104,9 @@ def run(args):
           f"frame under Verilator (the first build takes a minute or two) ...")
     with output_errors():
         result, params = hardware_demo(args.out, block=args.block, seed=args.seed)
-    pixels = params.width * params.height
     _, comparison = result.frames[0]
-    verdict = "bit-exact" if comparison.ok else comparison.message()
-    print(f"hardware ({params.describe()}): {args.out}/core.v")
-    print(f"  pixels compared {comparison.pixels}, mismatches {comparison.mismatches} ({verdict})")
-    print(f"  cycles per frame {result.cycles} ({result.cycles / pixels:.2f} per pixel), "
-          f"{100e6 / result.cycles:.0f} frames/s at 100 MHz; map in {args.out}/hardware.png")
+    print(f"hardware ({params.describe()}): {args.out}/core.v, map {args.out}/hardware.png")
+    print_verdict(comparison, result.cycles, params.width * params.height)
     return 0 if comparison.ok else 1
 
 
