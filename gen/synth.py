@@ -124,7 +124,7 @@ def _resources(target, cells):
 
 def _run(command, cwd, deadline, log_name):
     """Run one tool; returns None or a one-line failure description."""
-    remaining = None if deadline is None else max(1.0, deadline - time.monotonic())
+    remaining = None if deadline is None else max(0.01, deadline - time.monotonic())
     with open(Path(cwd) / log_name, "wb") as log:
         try:
             result = subprocess.run(command, cwd=cwd, stdout=log, stderr=subprocess.STDOUT,

@@ -80,8 +80,13 @@ def test_failing_synthesis_is_reported_not_raised():
 
 
 def test_timeout_is_reported():
-    result = synthesise(line_buffer_verilog(640, 3), "cyclonev", "line_buffer", timeout=0.01)
-    assert result["status"] == "timeout"
+    # A whole (small) core: Yosys needs seconds for it, far beyond the 0.2 s allowed.
+    from npstereo.gen.verilog import core_verilog
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=2, width=32,
+                          height=8)
+    result = synthesise(core_verilog(params), "cyclonev", "npstereo_core", timeout=0.2)
+    assert result["status"] == "timeout", result
+    assert result["message"] == "killed after 0.2 s"
 
 
 def test_small_core_memory_matches_architecture(tmp_path):
