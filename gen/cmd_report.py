@@ -88,10 +88,44 @@ def _source_hash():
     return digest.hexdigest()[:16]
 
 
-def _cache_key(params, target, pnr, freq):
+def _cache_key(params, target, pnr, freq, tools=None, hdl=None):
+    if target != "ecp5" or not pnr:
+        pnr, freq = False, None  # only nextpnr depends on them
     text = json.dumps({"params": repr(params), "target": target, "pnr": pnr, "freq": freq,
-                       "tools": tool_versions(), "hdl": _source_hash()}, sort_keys=True)
+                       "tools": tools or tool_versions(), "hdl": hdl or _source_hash()},
+                      sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def seed_cache(sweep_json, cache):
+    """Put the results of an earlier sweep document into the cache; returns how many.
+
+    A sweep is committed with the repository (docs/resources/sweep.json) but the cache
+    lives on one machine: this lets a fresh machine resume the sweep instead of
+    synthesising for hours what the document already holds. Only results of the same HDL
+    sources and tool versions are taken, so a changed design is synthesised again.
+    """
+    try:
+        document = json.loads(Path(sweep_json).read_text())
+    except (OSError, ValueError):
+        return 0
+    if document.get("tools") != tool_versions() or document.get("hdl_sources") != _source_hash():
+        return 0
+    seeded = 0
+    for report in document.get("reports", []):
+        params = StereoParams(**report["params"])
+        for target, result in report["results"].items():
+            if result.get("status") not in ("ok", "failed"):
+                continue
+            if target == "ecp5" and "freq" not in result:
+                continue  # an older result that did not record its nextpnr settings
+            path = Path(cache) / (_cache_key(params, target, result.get("pnr", False),
+                                             result.get("freq")) + ".json")
+            if not path.exists():
+                stored = {k: v for k, v in result.items() if k != "cached"}
+                write_text(path, json.dumps(stored, indent=1))
+                seeded += 1
+    return seeded
 
 
 def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
@@ -112,6 +146,8 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
         if verilog is None:
             verilog = core_verilog(params)
         result = synthesise(verilog, target, TOP_NAME, pnr=pnr, freq=freq, timeout=timeout)
+        if target == "ecp5":
+            result.update(pnr=pnr, freq=freq)
         if result["status"] == "ok" and result["memory_bits"] != expected_memory_bits(params):
             result["message"] = (f"memory bits {result['memory_bits']} differ from the "
                                  f"architecture's {expected_memory_bits(params)}")
@@ -373,6 +409,11 @@ def run(args):
     cache = None if args.no_cache else args.cache
     if args.paper:
         configurations = paper_configurations()
+        if cache is not None:
+            seeded = seed_cache(args.out / "sweep.json", cache)
+            if seeded:
+                print(f"resuming: {seeded} results taken from {args.out / 'sweep.json'}",
+                      file=sys.stderr)
     else:
         if args.width is None or args.height is None:
             raise UserError("--width and --height are required (or use --paper)")

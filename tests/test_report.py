@@ -189,3 +189,25 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
     written = cmd_report.sweep_plots([report], tmp_path)
     assert [p.name for p in written] == ["logic.png", "memory.png"]
     assert all(Image.open(p).size[0] > 100 for p in written)
+
+
+def test_sweep_document_seeds_the_cache(tmp_path):
+    """A committed sweep resumes on a fresh machine, but never for another HDL version."""
+    params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
+    result = {"target": "cyclonev", "status": "ok", "logic": 123, "cached": False}
+    document = {"tools": cmd_report.tool_versions(), "hdl_sources": cmd_report._source_hash(),
+                "reports": [{"params": cmd_report._params_dict(params),
+                             "results": {"cyclonev": result,
+                                         "ecp5": {"target": "ecp5", "status": "timeout"}}}]}
+    sweep = tmp_path / "sweep.json"
+    sweep.write_text(json.dumps(document))
+    assert cmd_report.seed_cache(sweep, tmp_path / "cache") == 1   # the timeout is not taken
+    stored = cmd_report.evaluate(params, ["cyclonev"], cache=tmp_path / "cache")
+    assert stored["results"]["cyclonev"]["cached"] is True
+    assert stored["results"]["cyclonev"]["logic"] == 123
+    assert cmd_report.seed_cache(sweep, tmp_path / "cache") == 0   # already there
+
+    document["hdl_sources"] = "0" * 16                              # another design
+    sweep.write_text(json.dumps(document))
+    assert cmd_report.seed_cache(sweep, tmp_path / "other") == 0
+
