@@ -81,19 +81,52 @@ def expected_memory_bits(params):
 
 
 def _source_hash():
-    """Digest of the HDL sources, so a changed design is never served from the cache."""
+    """Digest of the HDL sources: the fast path to a configuration's Verilog digest."""
     digest = hashlib.sha256()
     for path in sorted(_HDL_DIR.rglob("*.py")) + [_PARAMS_FILE]:
         digest.update(path.name.encode() + path.read_bytes())
     return digest.hexdigest()[:16]
 
 
-def _cache_key(params, target, pnr, freq, tools=None, hdl=None):
+def verilog_digest(text):
+    """Digest of generated Verilog without its header comment (which names versions)."""
+    body = "\n".join(line for line in text.splitlines() if not line.startswith("//"))
+    return hashlib.sha256(body.encode()).hexdigest()[:24]
+
+
+def _digest_memo(params, cache):
+    if cache is None:
+        return None
+    name = hashlib.sha256(f"{_source_hash()} {params!r}".encode()).hexdigest()[:24]
+    return Path(cache) / "verilog" / f"{name}.txt"
+
+
+def configuration_digest(params, cache=None, verilog=None):
+    """Digest of the Verilog that ``params`` generates, memoised per HDL source version.
+
+    A synthesis result depends on the Verilog and the tools, nothing else: keying the
+    cache on the Verilog keeps results across HDL changes that generate the same netlist
+    (a wrapper, a comment) and drops them after any change that does not. Generating
+    a large core takes up to half a minute, so the digest is remembered in ``cache``
+    under the source digest.
+    """
+    memo = _digest_memo(params, cache)
+    if memo is not None and memo.exists():
+        return memo.read_text().strip()
+    if verilog is None:
+        from .verilog import core_verilog
+        verilog = core_verilog(params)
+    digest = verilog_digest(verilog)
+    if memo is not None:
+        write_text(memo, digest + "\n")
+    return digest
+
+
+def _cache_key(params, target, pnr, freq, design):
     if target != "ecp5" or not pnr:
         pnr, freq = False, None  # only nextpnr depends on them
     text = json.dumps({"params": repr(params), "target": target, "pnr": pnr, "freq": freq,
-                       "tools": tools or tool_versions(), "hdl": hdl or _source_hash()},
-                      sort_keys=True)
+                       "tools": tool_versions(), "verilog": design}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
@@ -102,25 +135,31 @@ def seed_cache(sweep_json, cache):
 
     A sweep is committed with the repository (docs/resources/sweep.json) but the cache
     lives on one machine: this lets a fresh machine resume the sweep instead of
-    synthesising for hours what the document already holds. Only results of the same HDL
-    sources and tool versions are taken, so a changed design is synthesised again.
+    synthesising for hours what the document already holds. A result is taken only for
+    the same tool versions and the same generated Verilog (``verilog_sha`` of its report;
+    a document without it must come from the current HDL sources).
     """
     try:
         document = json.loads(Path(sweep_json).read_text())
     except (OSError, ValueError):
         return 0
-    if document.get("tools") != tool_versions() or document.get("hdl_sources") != _source_hash():
+    if document.get("tools") != tool_versions():
         return 0
+    same_sources = document.get("hdl_sources") == _source_hash()
     seeded = 0
     for report in document.get("reports", []):
         params = StereoParams(**report["params"])
+        design = configuration_digest(params, cache)
+        if report.get("verilog_sha", design if same_sources else None) != design:
+            continue
         for target, result in report["results"].items():
             if result.get("status") not in ("ok", "failed"):
                 continue
             if target == "ecp5" and "freq" not in result:
                 continue  # an older result that did not record its nextpnr settings
-            path = Path(cache) / (_cache_key(params, target, result.get("pnr", False),
-                                             result.get("freq")) + ".json")
+            key = _cache_key(params, target, result.get("pnr", False), result.get("freq"),
+                             design)
+            path = Path(cache) / f"{key}.json"
             if not path.exists():
                 stored = {k: v for k, v in result.items() if k != "cached"}
                 write_text(path, json.dumps(stored, indent=1))
@@ -137,8 +176,13 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
     from .verilog import TOP_NAME, core_verilog
     results, verilog = {}, None
     cycles = cycles_per_frame(params)
+    memo = _digest_memo(params, cache)
+    if memo is None or not memo.exists():
+        verilog = core_verilog(params)
+    design = configuration_digest(params, cache, verilog)
     for target in targets:
-        path = None if cache is None else Path(cache) / f"{_cache_key(params, target, pnr, freq)}.json"
+        path = None if cache is None else (
+            Path(cache) / f"{_cache_key(params, target, pnr, freq, design)}.json")
         if path is not None and path.exists():
             results[target] = json.loads(path.read_text())
             results[target]["cached"] = True
@@ -156,7 +200,7 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
         if path is not None and result["status"] != "timeout":
             write_text(path, json.dumps(result, indent=1))
         results[target] = dict(result, cached=False)
-    return {"params": _params_dict(params), "cycles_per_frame": cycles,
+    return {"params": _params_dict(params), "verilog_sha": design, "cycles_per_frame": cycles,
             "expected_memory_bits": expected_memory_bits(params), "results": results}
 
 

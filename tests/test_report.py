@@ -115,12 +115,25 @@ def _latency(params):
                     if "latency" in line))
 
 
-def test_cache_key_depends_on_configuration():
+def test_cache_key_depends_on_configuration_and_verilog():
     params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
-    key = cmd_report._cache_key(params, "cyclonev", False, 150.0)
-    assert key == cmd_report._cache_key(params, "cyclonev", False, 150.0)
-    assert key != cmd_report._cache_key(params.replace(block=5), "cyclonev", False, 150.0)
-    assert key != cmd_report._cache_key(params, "ecp5", False, 150.0)
+    key = cmd_report._cache_key(params, "cyclonev", False, 150.0, "v1")
+    assert key == cmd_report._cache_key(params, "cyclonev", False, 150.0, "v1")
+    assert key != cmd_report._cache_key(params.replace(block=5), "cyclonev", False, 150.0, "v1")
+    assert key != cmd_report._cache_key(params, "ecp5", False, 150.0, "v1")
+    assert key != cmd_report._cache_key(params, "cyclonev", False, 150.0, "v2")
+
+
+def test_verilog_digest_ignores_the_header_only(tmp_path):
+    from npstereo.gen.verilog import core_verilog
+    params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
+    text = core_verilog(params)
+    digest = cmd_report.configuration_digest(params, tmp_path)
+    assert digest == cmd_report.verilog_digest(text)
+    assert digest == cmd_report.verilog_digest("// another version\n" + text)
+    assert digest != cmd_report.verilog_digest(text.replace("npstereo_core", "other_core"))
+    assert cmd_report.configuration_digest(params, tmp_path) == digest      # memoised
+    assert cmd_report.configuration_digest(params.replace(block=5), tmp_path) != digest
 
 
 def test_failed_cell_keeps_the_sweep_going(monkeypatch):
@@ -195,8 +208,9 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     """A committed sweep resumes on a fresh machine, but never for another HDL version."""
     params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
     result = {"target": "cyclonev", "status": "ok", "logic": 123, "cached": False}
-    document = {"tools": cmd_report.tool_versions(), "hdl_sources": cmd_report._source_hash(),
+    document = {"tools": cmd_report.tool_versions(), "hdl_sources": "old sources",
                 "reports": [{"params": cmd_report._params_dict(params),
+                             "verilog_sha": cmd_report.configuration_digest(params),
                              "results": {"cyclonev": result,
                                          "ecp5": {"target": "ecp5", "status": "timeout"}}}]}
     sweep = tmp_path / "sweep.json"
@@ -207,7 +221,13 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     assert stored["results"]["cyclonev"]["logic"] == 123
     assert cmd_report.seed_cache(sweep, tmp_path / "cache") == 0   # already there
 
-    document["hdl_sources"] = "0" * 16                              # another design
+    document["reports"][0]["verilog_sha"] = "0" * 24                 # another design
     sweep.write_text(json.dumps(document))
     assert cmd_report.seed_cache(sweep, tmp_path / "other") == 0
+    del document["reports"][0]["verilog_sha"]                       # an older document:
+    sweep.write_text(json.dumps(document))                          # only from these sources
+    assert cmd_report.seed_cache(sweep, tmp_path / "other") == 0
+    document["hdl_sources"] = cmd_report._source_hash()
+    sweep.write_text(json.dumps(document))
+    assert cmd_report.seed_cache(sweep, tmp_path / "other") == 1
 
