@@ -274,8 +274,11 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, jobs, progress
     with ProcessPoolExecutor(max_workers=jobs) as pool, \
             tqdm(total=len(configurations), desc="synthesis", unit="config",
                  file=sys.stderr) as bar:
+        # Cheap cells first: ext. census takes many times longer than the other three,
+        # and a sweep stopped early should hold as many cells as possible.
+        submitted = sorted(configurations, key=lambda p: (p.transform == "ext-census", p.block))
         futures = {pool.submit(_job, p, targets, pnr, freq, timeout, cache): p
-                   for p in configurations}
+                   for p in submitted}
         for future in as_completed(futures):
             report = future.result()
             p = futures[future]
