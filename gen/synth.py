@@ -133,7 +133,8 @@ def _run(command, cwd, deadline, log_name):
             return "timeout"
     if result.returncode != 0:
         text = (Path(cwd) / log_name).read_text(errors="replace").splitlines()
-        errors = [line.strip() for line in text if "ERROR" in line] or text[-1:] or ["no output"]
+        errors = ([line.strip() for line in text if "ERROR" in line]
+                  or [line.strip() for line in text if line.strip()][-1:] or ["no output"])
         return f"{Path(command[0]).name} exit {result.returncode}: {errors[0][:200]}"
     return None
 
