@@ -81,6 +81,7 @@ class NpStereoCore(wiring.Component):
         positions, clocks = self.calculation_stage.latency
         p = self.params
         # The aggregation window centre trails the newest costs by a rows and a columns.
+        clocks += self.lr_check.clock_latency
         return (self.input_stage.latency + positions + -(-clocks // p.rounds)
                 + p.agg_radius * (p.width + 1) + self.lr_check.latency)
 
