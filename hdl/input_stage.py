@@ -59,11 +59,16 @@ class InputStage(wiring.Component):
         width, height, block, r = p.width, p.height, p.block, p.radius
         m = Module()
 
+        # The line buffers' read address is the column after the incoming pixel's; it is
+        # kept in a register (col_after) rather than incremented in front of the block
+        # RAMs' address inputs.
         col = Signal(range(width))
+        col_after = Signal(range(width))
         addr = Mux(self.start, 0, col)
-        next_addr = Mux(addr == width - 1, 0, addr + 1)
+        next_addr = Mux(self.start, 1, col_after)
         with m.If(self.advance):
-            m.d.sync += col.eq(next_addr)
+            m.d.sync += [col.eq(next_addr),
+                         col_after.eq(Mux(next_addr == width - 1, 0, next_addr + 1))]
 
         # Centre counters: position 0 of a frame is centred r rows and r columns earlier.
         first = -(r * width + r)
