@@ -71,7 +71,7 @@ class CalculationStage(wiring.Component):
         self.position_latency = self.transform_left.latency + 1
         #: Clocks from the position register to the outputs of the same round: costs,
         #: vertical (memory read), horizontal (a positions and a register), minimum tree.
-        self.round_latency = (self.cost_units[0].latency + (3 if a else 0)
+        self.round_latency = (self.cost_units[0].latency + (4 if a else 0)
                               + (a * rounds + 1 if a else 0) + self.min_tree.latency)
         #: The output tag is the centre of the aggregation window, a rows and a columns
         #: behind the newest costs.
@@ -157,15 +157,17 @@ class CalculationStage(wiring.Component):
             shape=unsigned(rows * per_round * bits), depth=p.width * p.rounds, init=[])
         rd = lines.read_port(domain="sync")
         wr = lines.write_port()
-        m.d.comb += [rd.addr.eq(tag.x * p.rounds + tag.round), rd.en.eq(self.en)]
-        # Three registers, for the clock: the block RAM's read register, its data again
-        # (the RAM's clock-to-output alone is a third of a cycle), and the column sums,
-        # so that neither the RAM nor the adders reach into the horizontal sum. The
-        # write-back lands two clocks after the read; the same address is read again only
-        # a row (W * R clocks > 2) later, so no read can see a stale word.
+        # Four registers, for the clock: the address (it fans out to every block RAM of
+        # the buffer), the block RAM's read register, its data again (the RAM's
+        # clock-to-output alone is a third of a cycle), and the column sums, so that
+        # neither the RAM nor the adders reach into the horizontal sum. The write-back
+        # lands two clocks after the read; the same address is read again only a row
+        # (W * R clocks > 2) later, so no read can see a stale word.
+        address = delay(m, self.en, tag.x * p.rounds + tag.round, 1, "cost_lines_address")
+        m.d.comb += [rd.addr.eq(address), rd.en.eq(self.en)]
         read = delay(m, self.en, rd.data, 1, "cost_lines_data")
-        held = [delay(m, self.en, c, 2, f"vertical_in{i}") for i, c in enumerate(costs)]
-        held_tag = delay(m, self.en, tag, 2, "vertical_tag")
+        held = [delay(m, self.en, c, 3, f"vertical_in{i}") for i, c in enumerate(costs)]
+        held_tag = delay(m, self.en, tag, 3, "vertical_tag")
 
         def stored(row, i):  # row 0 = the row above held_tag.y
             start = (row * per_round + i) * bits
@@ -178,7 +180,8 @@ class CalculationStage(wiring.Component):
                 total = total + Mux(held_tag.y - 1 - row >= 0, stored(row, i), 0)
             sums.append(total)
         m.d.comb += [
-            wr.addr.eq(held_tag.x * p.rounds + held_tag.round), wr.en.eq(self.en),
+            wr.addr.eq(delay(m, self.en, address, 2, "cost_lines_write_address")),
+            wr.en.eq(self.en),
             wr.data.eq(Cat(*held, *[stored(row, i) for row in range(rows - 1)
                                     for i in range(per_round)])),
         ]

@@ -16,7 +16,7 @@ output word is out, then IDLE again.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..golden.params import ParameterError
@@ -81,6 +81,7 @@ class NpStereoCore(wiring.Component):
         positions, clocks = self.calculation_stage.latency
         p = self.params
         # The aggregation window centre trails the newest costs by a rows and a columns.
+        clocks += self.lr_check.clock_latency
         return (self.input_stage.latency + positions + -(-clocks // p.rounds)
                 + p.agg_radius * (p.width + 1) + self.lr_check.latency)
 
@@ -93,7 +94,29 @@ class NpStereoCore(wiring.Component):
         m.submodules.evaluation_stage = ev = self.evaluation_stage
         m.submodules.lr_check = lr = self.lr_check
 
+        # Both AXI ports are registered (two-entry queues), and so is the global enable:
+        # ``en`` drives the clock enable of every pipeline register, so it must leave a
+        # flip-flop, not a tree of logic behind the ports. It is computed a clock ahead,
+        # from the next values of everything it depends on (see ``_enable``).
+        beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
+        incoming = Signal(beat)
+        m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
+                     incoming.last.eq(self.s_axis_tlast)]
+        pop = Signal()
+        head, head_valid, next_head, next_head_valid = _queue(
+            m, "in", incoming, self.s_axis_tvalid, pop, self.s_axis_tready)
+
+        word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
+        word = Signal(word_layout)
+        push_word, pop_word = Signal(), Signal()
+        out_head, out_valid, _, _, out_room_next = _queue(
+            m, "out", word, push_word, pop_word, Signal(), room=True)
+        m.d.comb += [pop_word.eq(out_valid & self.m_axis_tready),
+                     self.m_axis_tvalid.eq(out_valid), self.m_axis_tdata.eq(out_head.data),
+                     self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last)]
+
         round_ = Signal(bits_for(rounds - 1))
+        next_round = Signal.like(round_)
         last_round = round_ == rounds - 1
         px = Signal(range(width))
         py = Signal(range(height))
@@ -102,63 +125,60 @@ class NpStereoCore(wiring.Component):
         error = Signal()
         m.d.sync += self.framing_error.eq(error)
 
-        out_free = ~self.m_axis_tvalid | self.m_axis_tready
-        position = Signal()   # a position is available for the input stage this clock
         en = Signal()
         advance = en & last_round
         start = Signal()
         take_pixel = Signal()  # the position is the input pixel (not a dummy zero)
-        m.d.comb += [en.eq(out_free & (~last_round | position))]
-        with m.If(en):
-            m.d.sync += round_.eq(Mux(last_round, 0, round_ + 1))
+        m.d.comb += next_round.eq(Mux(en, Mux(last_round, 0, round_ + 1), round_))
+        m.d.sync += round_.eq(next_round)
 
         with m.If(advance):
             m.d.sync += [px.eq(Mux(end_of_line, 0, px + 1)),
                          py.eq(Mux(end_of_line, Mux(end_of_frame, 0, py + 1), py))]
 
         # An explicit state register and if/else chains rather than m.FSM: Amaranth's FSM
-        # emits partial case statements that Verilator's lint rejects (CASEINCOMPLETE).
+        # emits partial case statements that Verilator's lint rejects (CASEINCOMPLETE);
+        # and the enable needs the next state as a signal.
         state = Signal(range(4), name="framing_state")
+        next_state = Signal.like(state)
+        m.d.comb += next_state.eq(state)
+        m.d.sync += state.eq(next_state)
         idle, frame, fill = (state == n for n in (IDLE, FRAME, FILL))
         with m.If(idle):
-            m.d.comb += [position.eq(self.s_axis_tvalid & self.s_axis_tuser),
-                         start.eq(1), take_pixel.eq(1),
-                         self.s_axis_tready.eq(~self.s_axis_tuser | (last_round & out_free))]
-            with m.If(self.s_axis_tvalid & ~self.s_axis_tuser):
+            m.d.comb += [start.eq(1), take_pixel.eq(1),
+                         pop.eq(head_valid & (~head.user | advance))]
+            with m.If(head_valid & ~head.user):
                 m.d.comb += error.eq(1)
             with m.If(advance):
                 m.d.sync += [px.eq(1), py.eq(0)]
-                with m.If(self.s_axis_tlast):
-                    m.d.comb += error.eq(1)
-                    m.d.sync += state.eq(FILL)
+                with m.If(head.last):
+                    m.d.comb += [error.eq(1), next_state.eq(FILL)]
                 with m.Else():
-                    m.d.sync += state.eq(FRAME)
+                    m.d.comb += next_state.eq(FRAME)
         with m.Elif(frame):
-            m.d.comb += [position.eq(self.s_axis_tvalid & ~self.s_axis_tuser),
-                         take_pixel.eq(1),
-                         self.s_axis_tready.eq(~self.s_axis_tuser & last_round & out_free)]
-            with m.If(self.s_axis_tvalid & self.s_axis_tuser):
-                m.d.comb += error.eq(1)
-                m.d.sync += state.eq(FILL)
+            m.d.comb += [take_pixel.eq(1), pop.eq(advance)]
+            with m.If(head_valid & head.user):
+                m.d.comb += [error.eq(1), next_state.eq(FILL)]
             with m.Elif(advance):
-                with m.If(self.s_axis_tlast != end_of_line):
+                with m.If(head.last != end_of_line):
                     m.d.comb += error.eq(1)
                 with m.If(end_of_frame):
-                    m.d.sync += state.eq(FLUSH)
-                with m.Elif(self.s_axis_tlast != end_of_line):
-                    m.d.sync += state.eq(FILL)
+                    m.d.comb += next_state.eq(FLUSH)
+                with m.Elif(head.last != end_of_line):
+                    m.d.comb += next_state.eq(FILL)
         with m.Elif(fill):
-            m.d.comb += position.eq(1)
             with m.If(advance & end_of_frame):
-                m.d.sync += state.eq(FLUSH)
+                m.d.comb += next_state.eq(FLUSH)
         with m.Else():  # FLUSH
-            m.d.comb += position.eq(1)
             with m.If(en & lr.produce & (lr.x == width - 1) & (lr.y == height - 1)):
-                m.d.sync += state.eq(IDLE)
+                m.d.comb += next_state.eq(IDLE)
+
+        m.d.sync += en.eq(_enable(next_state, next_round == rounds - 1, next_head_valid,
+                                  next_head.user, out_room_next))
 
         m.d.comb += [
-            inp.left.eq(Mux(take_pixel, self.s_axis_tdata[:8], 0)),
-            inp.right.eq(Mux(take_pixel, self.s_axis_tdata[8:], 0)),
+            inp.left.eq(Mux(take_pixel, head.data[:8], 0)),
+            inp.right.eq(Mux(take_pixel, head.data[8:], 0)),
             inp.advance.eq(advance), inp.start.eq(start),
             calc.window_left.eq(inp.window_left), calc.window_right.eq(inp.window_right),
             calc.tag_in.eq(inp.tag), calc.en.eq(en), calc.round.eq(round_),
@@ -168,14 +188,52 @@ class NpStereoCore(wiring.Component):
             lr.disparity.eq(ev.disparity_out), lr.done.eq(ev.done),
         ]
 
-        word = Cat(Mux(lr.valid, lr.disparity_out, 0),
-                   Const(0, output_width(p) - 1 - len(lr.disparity_out)), lr.valid)
-        with m.If(en & lr.produce):
-            m.d.sync += [
-                self.m_axis_tvalid.eq(1), self.m_axis_tdata.eq(word),
-                self.m_axis_tuser.eq((lr.x == 0) & (lr.y == 0)),
-                self.m_axis_tlast.eq(lr.x == width - 1),
-            ]
-        with m.Elif(self.m_axis_tready):
-            m.d.sync += self.m_axis_tvalid.eq(0)
+        m.d.comb += [
+            push_word.eq(en & lr.produce),
+            word.data.eq(Cat(Mux(lr.valid, lr.disparity_out, 0),
+                             Const(0, output_width(p) - 1 - len(lr.disparity_out)), lr.valid)),
+            word.user.eq((lr.x == 0) & (lr.y == 0)),
+            word.last.eq(lr.x == width - 1),
+        ]
         return m
+
+
+def _enable(state, last_round, head_valid, head_is_start, out_room):
+    """Whether a clock may advance the pipeline in ``state``.
+
+    A clock needs room for an output word, and in the last round of a position also
+    the position: the input pixel (a start of frame in IDLE, any other pixel in FRAME) or
+    a dummy position (FILL, FLUSH).
+    """
+    position = Mux(state == IDLE, head_valid & head_is_start,
+                   Mux(state == FRAME, head_valid & ~head_is_start, 1))
+    return out_room & (~last_round | position)
+
+
+def _queue(m, name, incoming, push_valid, pop, ready, room=False):
+    """A two-entry queue of registers with the next clock's head and fill level.
+
+    Returns ``(head, valid, next_head, next_valid)`` (plus ``next_room``, whether the
+    queue can take a word in the next clock, with ``room``). ``ready`` is driven with
+    "not full" (from the level register alone) and a word is taken when ``push_valid``
+    and ready.
+    """
+    entries = [Signal.like(incoming, name=f"{name}_queue{i}") for i in range(2)]
+    level = Signal(range(3), name=f"{name}_queue_level")
+    push = push_valid & (level != 2)
+    m.d.comb += ready.eq(level != 2)
+    kept = level - pop  # words left after this clock's pop, before the push
+    next_level = Signal.like(level, name=f"{name}_queue_next_level")
+    m.d.comb += next_level.eq(kept + push)
+    m.d.sync += level.eq(next_level)
+    with m.If(pop):
+        m.d.sync += entries[0].eq(entries[1])
+    with m.If(push):
+        with m.If(kept == 0):
+            m.d.sync += entries[0].eq(incoming)
+        with m.Else():
+            m.d.sync += entries[1].eq(incoming)
+    next_head = Signal.like(incoming, name=f"{name}_queue_next_head")
+    m.d.comb += next_head.eq(Mux(kept == 0, incoming, Mux(pop, entries[1], entries[0])))
+    result = (entries[0], level != 0, next_head, next_level != 0)
+    return result + ((next_level != 2,) if room else ())

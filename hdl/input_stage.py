@@ -59,38 +59,46 @@ class InputStage(wiring.Component):
         width, height, block, r = p.width, p.height, p.block, p.radius
         m = Module()
 
+        # The line buffers' read address is the column after the incoming pixel's; it is
+        # kept in a register (col_after) rather than incremented in front of the block
+        # RAMs' address inputs.
         col = Signal(range(width))
+        col_after = Signal(range(width))
         addr = Mux(self.start, 0, col)
-        next_addr = Mux(addr == width - 1, 0, addr + 1)
+        next_addr = Mux(self.start, 1, col_after)
         with m.If(self.advance):
-            m.d.sync += col.eq(next_addr)
+            m.d.sync += [col.eq(next_addr),
+                         col_after.eq(Mux(next_addr == width - 1, 0, next_addr + 1))]
 
         # Centre counters: position 0 of a frame is centred r rows and r columns earlier.
         first = -(r * width + r)
         first_x, first_y = first % width, first // width
         _, highest = y_range(p)
         tag = Signal(tag_layout(p))
+        next_x = Signal.like(tag.x)
+        next_y = Signal.like(tag.y)
+        with m.If(self.start):
+            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y)]
+        with m.Elif(tag.x == width - 1):
+            m.d.comb += [next_x.eq(0), next_y.eq(Mux(tag.y < highest, tag.y + 1, tag.y))]
+        with m.Else():
+            m.d.comb += [next_x.eq(tag.x + 1), next_y.eq(tag.y)]
         with m.If(self.advance):
-            m.d.sync += tag.live.eq(1)
-            with m.If(self.start):
-                m.d.sync += [tag.x.eq(first_x), tag.y.eq(first_y)]
-            with m.Elif(tag.x == width - 1):
-                m.d.sync += tag.x.eq(0)
-                with m.If(tag.y < highest):
-                    m.d.sync += tag.y.eq(tag.y + 1)
-            with m.Else():
-                m.d.sync += tag.x.eq(tag.x + 1)
+            m.d.sync += [tag.live.eq(1), tag.x.eq(next_x), tag.y.eq(next_y)]
         m.d.comb += self.tag.eq(tag)
 
-        # One signal per window row/column and per pixel: Amaranth would otherwise rebuild
-        # the comparisons for every use.
+        # Which window rows/columns lie inside the frame, registered with the counters
+        # from their next values: comparing the counters in the same clock would put two
+        # carry chains (this one and the transform's comparison) in front of the
+        # transform's first register.
         row_ok = [Signal(name=f"row_ok{k}") for k in range(block)]
         col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
         for k, offset in enumerate(range(-r, r + 1)):
-            m.d.comb += row_ok[k].eq((tag.y >= -offset) & (tag.y < height - offset))
-            # The column counter is always in 0 .. W-1: only one side can fail.
-            m.d.comb += col_ok[k].eq(tag.x >= -offset if offset < 0 else
-                                     tag.x < width - offset if offset > 0 else 1)
+            with m.If(self.advance):
+                m.d.sync += row_ok[k].eq((next_y >= -offset) & (next_y < height - offset))
+                # The column counter is always in 0 .. W-1: only one side can fail.
+                m.d.sync += col_ok[k].eq(next_x >= -offset if offset < 0 else
+                                         next_x < width - offset if offset > 0 else 1)
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
                 for row in range(block)]
         m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])

@@ -110,21 +110,6 @@ def test_broken_core_fails(simulator, monkeypatch):
     assert f"first at x={x} y={y}" in result.message()
 
 
-def test_icarus_needs_verilog_2005_semantics(monkeypatch):
-    """Under the runner's bare -g2012 the core's combinational blocks never wake at time 0.
-
-    Guards the reason for ``cosim.ICARUS_ARGS``: without it the comparison must fail.
-    """
-    monkeypatch.setattr(cosim, "ICARUS_ARGS", [])
-    params = config("census", 5, 8, 2, 1)
-    left, right = frames(params, 1)[0]
-    try:
-        result, _ = cosim.run_frame("icarus", params, left, right, optimize=False)
-    except cosim.CosimError:
-        return
-    assert not result.ok
-
-
 def test_compare_reports_first_pixel_and_count():
     params = config("census", 3, 4, 1, None)
     expected = np.zeros(WIDTH * HEIGHT, dtype=np.int64)
