@@ -175,3 +175,15 @@ def test_missing_size_is_a_parameter_error():
     from npstereo.golden.params import ParameterError
     with pytest.raises(ParameterError, match="width and height"):
         NpStereoCore(StereoParams(transform="census", block=3, disparities=8))
+
+
+def test_broken_enable_prediction_is_caught(monkeypatch):
+    """An enable that runs ahead of the input (ignores whether a pixel is there) must fail."""
+    from npstereo.hdl import core as core_module
+    monkeypatch.setattr(core_module, "_enable",
+                        lambda state, last_round, head_valid, head_is_start, out_room: out_room)
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=2,
+                          lr_threshold=None, width=20, height=8)
+    pair = scene_pair(np.random.default_rng(3), 20, 8, 8)
+    with pytest.raises(AssertionError):
+        check_frames(params, [pair], frame_beats(*pair), valid_prob=GAPS, ready_prob=GAPS)
