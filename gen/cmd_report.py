@@ -101,7 +101,7 @@ def _digest_memo(params, cache):
     return Path(cache) / "verilog" / f"{name}.txt"
 
 
-def configuration_digest(params, cache=None, verilog=None):
+def configuration_digest(params, cache=None):
     """Digest of the Verilog that ``params`` generates, memoised per HDL source version.
 
     A synthesis result depends on the Verilog and the tools, nothing else: keying the
@@ -110,16 +110,20 @@ def configuration_digest(params, cache=None, verilog=None):
     a large core takes up to half a minute, so the digest is remembered in ``cache``
     under the source digest.
     """
+    return _design(params, cache)[0]
+
+
+def _design(params, cache):
+    """``(digest, verilog)``; ``verilog`` is None when the digest came from the memo."""
     memo = _digest_memo(params, cache)
     if memo is not None and memo.exists():
-        return memo.read_text().strip()
-    if verilog is None:
-        from .verilog import core_verilog
-        verilog = core_verilog(params)
+        return memo.read_text().strip(), None
+    from .verilog import core_verilog
+    verilog = core_verilog(params)
     digest = verilog_digest(verilog)
     if memo is not None:
         write_text(memo, digest + "\n")
-    return digest
+    return digest, verilog
 
 
 def _cache_key(params, target, pnr, freq, design):
@@ -174,12 +178,9 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
     timeouts are not, so a longer ``--timeout`` retries them.
     """
     from .verilog import TOP_NAME, core_verilog
-    results, verilog = {}, None
+    results = {}
     cycles = cycles_per_frame(params)
-    memo = _digest_memo(params, cache)
-    if memo is None or not memo.exists():
-        verilog = core_verilog(params)
-    design = configuration_digest(params, cache, verilog)
+    design, verilog = _design(params, cache)
     for target in targets:
         path = None if cache is None else (
             Path(cache) / f"{_cache_key(params, target, pnr, freq, design)}.json")

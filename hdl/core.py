@@ -103,14 +103,13 @@ class NpStereoCore(wiring.Component):
         m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
                      incoming.last.eq(self.s_axis_tlast)]
         pop = Signal()
-        head, head_valid, next_head, next_head_valid = _queue(
+        head, head_valid, next_head, next_head_valid, _ = _queue(
             m, "in", incoming, self.s_axis_tvalid, pop, self.s_axis_tready)
 
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
         word = Signal(word_layout)
         push_word, pop_word = Signal(), Signal()
-        out_head, out_valid, _, _, out_room_next = _queue(
-            m, "out", word, push_word, pop_word, Signal(), room=True)
+        out_head, out_valid, _, _, out_room_next = _queue(m, "out", word, push_word, pop_word)
         m.d.comb += [pop_word.eq(out_valid & self.m_axis_tready),
                      self.m_axis_tvalid.eq(out_valid), self.m_axis_tdata.eq(out_head.data),
                      self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last)]
@@ -210,18 +209,19 @@ def _enable(state, last_round, head_valid, head_is_start, out_room):
     return out_room & (~last_round | position)
 
 
-def _queue(m, name, incoming, push_valid, pop, ready, room=False):
+def _queue(m, name, incoming, push_valid, pop, ready=None):
     """A two-entry queue of registers with the next clock's head and fill level.
 
-    Returns ``(head, valid, next_head, next_valid)`` (plus ``next_room``, whether the
-    queue can take a word in the next clock, with ``room``). ``ready`` is driven with
-    "not full" (from the level register alone) and a word is taken when ``push_valid``
-    and ready.
+    Returns ``(head, valid, next_head, next_valid, next_room)``; ``next_room``: the queue
+    can take a word in the next clock. A word is taken when ``push_valid`` and the queue
+    is not full; ``ready`` (if given) is driven with "not full", from the level register
+    alone.
     """
     entries = [Signal.like(incoming, name=f"{name}_queue{i}") for i in range(2)]
     level = Signal(range(3), name=f"{name}_queue_level")
     push = push_valid & (level != 2)
-    m.d.comb += ready.eq(level != 2)
+    if ready is not None:
+        m.d.comb += ready.eq(level != 2)
     kept = level - pop  # words left after this clock's pop, before the push
     next_level = Signal.like(level, name=f"{name}_queue_next_level")
     m.d.comb += next_level.eq(kept + push)
@@ -235,5 +235,4 @@ def _queue(m, name, incoming, push_valid, pop, ready, room=False):
             m.d.sync += entries[1].eq(incoming)
     next_head = Signal.like(incoming, name=f"{name}_queue_next_head")
     m.d.comb += next_head.eq(Mux(kept == 0, incoming, Mux(pop, entries[1], entries[0])))
-    result = (entries[0], level != 0, next_head, next_level != 0)
-    return result + ((next_level != 2,) if room else ())
+    return entries[0], level != 0, next_head, next_level != 0, next_level != 2
