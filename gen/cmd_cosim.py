@@ -11,19 +11,18 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm
 
 from ..golden.data import load_middlebury, to_gray
-from ..golden.params import UserError
 from ..golden.pipeline import disparity_map
 from ..golden.synthetic import synthetic_pair
+from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
+from ..params import UserError
+from ..sim.cosim import SIMULATORS, CosimError, run_frame
 from .cmd_match import add_matching_arguments, params_from_args
-from .plots import save_disparity_png
+from .images import save_disparity_png
 
 __all__ = ["add_parser", "run", "parse_crop", "print_verdict"]
-
-SIMULATORS = ("verilator", "icarus", "amaranth")
 
 
 def parse_crop(text, width, height):
@@ -60,46 +59,34 @@ def _out_dir(value):
 
 
 def run(args):
-    from ..sim.frames import compare_frame, decode_map, expected_words
     out = _out_dir(args.out)
     if args.clock_mhz <= 0:
         raise UserError(f"--clock-mhz must be > 0, not {args.clock_mhz}")
     base = params_from_args(args)
     name, left, right = _frame(args)
     params = base.with_size(left.shape[1], left.shape[0])
+    check_buildable(params)
     golden = disparity_map(left, right, params).disparity
     pixels = params.width * params.height
     print(f"{args.simulator}: {name} {params.describe()}", file=sys.stderr)
     start = time.perf_counter()
-    build_seconds = 0.0
     if args.simulator != "amaranth":
         print("building the core and the simulation model (cached) ...", file=sys.stderr)
     with tqdm(total=pixels, desc=f"cosim {args.simulator}", unit="px", file=sys.stderr,
               leave=False) as bar:
-        if args.simulator == "amaranth":
-            from ..sim.amaranth_run import run_amaranth
-            data, tuser, tlast, cycles = run_amaranth(params, left, right, bar.update)
-            comparison = compare_frame(expected_words(golden, params), data, tuser, tlast,
-                                       params)
-            hardware = decode_map(data, params)
-        else:
-            from ..sim.cosim import CosimError, run_frame
-            try:
-                result, model = run_frame(args.simulator, params, left, right,
-                                          progress=bar.update, golden=golden)
-            except CosimError as error:
-                print(f"npstereo: cosim failed: {error}", file=sys.stderr)
-                return 1
-            _, comparison = result.frames[0]
-            cycles = result.cycles
-            build_seconds = model.seconds
-            hardware = np.load(result.run_dir / "disparity.npy")
+        try:
+            result = run_frame(args.simulator, params, left, right, progress=bar.update,
+                               golden=golden)
+        except CosimError as error:
+            print(f"npstereo: cosim failed: {error}", file=sys.stderr)
+            return 1
     seconds = time.perf_counter() - start
+    _, comparison = result.frames[0]
     hardware_png, golden_png = out / "hardware.png", out / "golden.png"
-    save_disparity_png(hardware_png, hardware, params.disparities - 1)
+    save_disparity_png(hardware_png, result.disparity, params.disparities - 1)
     save_disparity_png(golden_png, golden, params.disparities - 1)
-    print_verdict(comparison, cycles, pixels, args.clock_mhz)
-    print(f"time:             {seconds:.1f} s ({build_seconds:.1f} s building)")
+    print_verdict(comparison, result.cycles, pixels, args.clock_mhz)
+    print(f"time:             {seconds:.1f} s ({result.build_seconds:.1f} s building)")
     print(f"maps:             {hardware_png} (hardware), {golden_png} (golden)")
     return 0 if comparison.ok else 1
 
@@ -128,8 +115,9 @@ def add_parser(subparsers):
     source.add_argument("--synthetic", action="store_true",
                         help="a seeded synthetic scene instead of a dataset")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scene")
-    add_matching_arguments(parser)
-    parser.add_argument("--crop", help="simulate only the central WIDTHxHEIGHT pixels")
+    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    parser.add_argument("--crop", help="simulate only the central WIDTHxHEIGHT pixels "
+                        f"(the hardware takes at most {MAX_WIDTH} columns)")
     parser.add_argument("--clock-mhz", type=float, default=100.0,
                         help="clock for the implied frame rate (default 100)")
     parser.add_argument("--out", required=True,

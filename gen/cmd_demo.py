@@ -8,13 +8,17 @@ co-simulates the whole frame under Verilator, bit for bit against the golden map
 import json
 from pathlib import Path
 
-from ..golden.params import TRANSFORMS, StereoParams
+from tqdm import tqdm
+
 from ..golden.quality import evaluate
 from ..golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
+from ..hdl.verilog import core_verilog
+from ..params import TRANSFORMS, StereoParams
+from ..sim.cosim import run_frame
 from .atomic import write_text
 from .cmd_cosim import print_verdict
 from .cmd_match import check_output_folder, match_images, output_errors
-from .plots import save_disparity_png, save_gray_png
+from .images import save_disparity_png, save_gray_png
 
 __all__ = ["add_parser", "run", "golden_demo"]
 
@@ -65,12 +69,6 @@ def hardware_demo(out, transform="census", block=9, rounds=4, seed=0):
 
     Returns the :class:`~npstereo.sim.cosim.RunResult` of the frame and the parameters.
     """
-    import numpy as np
-    from tqdm import tqdm
-
-    from ..sim.cosim import run_frame
-    from .verilog import core_verilog
-
     out = Path(out)
     pair = synthetic_pair(seed=seed)
     left, right = pair.gray()
@@ -80,10 +78,9 @@ def hardware_demo(out, transform="census", block=9, rounds=4, seed=0):
     verilog = core_verilog(params)
     write_text(out / "core.v", verilog)
     with tqdm(total=width * height, desc="cosim verilator", unit="px", leave=False) as bar:
-        result, _ = run_frame("verilator", params, left, right, core_text=verilog,
-                              progress=bar.update)
-    hardware = np.load(result.run_dir / "disparity.npy")
-    save_disparity_png(out / "hardware.png", hardware, params.disparities - 1)
+        result = run_frame("verilator", params, left, right, core_text=verilog,
+                           progress=bar.update)
+    save_disparity_png(out / "hardware.png", result.disparity, params.disparities - 1)
     return result, params
 
 

@@ -14,9 +14,9 @@ from tqdm import tqdm
 
 from ..golden.data import load_middlebury
 from ..golden.degrade import bayer_pair, gaussian_noise_pair
-from ..golden.params import UserError
 from ..golden.quality import evaluate
 from ..golden.synthetic import synthetic_pair
+from ..params import UserError
 from .atomic import write_text
 from .cmd_match import add_matching_arguments, match_images, output_errors, params_from_args
 

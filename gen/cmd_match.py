@@ -10,25 +10,32 @@ from pathlib import Path
 import numpy as np
 
 from ..golden.data import read_image, to_gray
-from ..golden.params import TRANSFORMS, StereoParams, UserError
 from ..golden.pipeline import disparity_map
+from ..params import TRANSFORMS, StereoParams, UserError
 from .atomic import atomic_path
-from .plots import save_disparity_png
+from .images import save_disparity_png
 
 __all__ = ["add_parser", "run", "add_matching_arguments", "params_from_args", "match_images",
            "save_raw", "output_errors", "check_output_folder"]
 
 
-def add_matching_arguments(parser, many=False):
-    """Options of the matching pipeline; with ``many``, transform and block take lists."""
+def add_matching_arguments(parser, many=False, max_block=None, max_disparities=None):
+    """Options of the matching pipeline; with ``many``, transform and block take lists.
+
+    ``max_block``, ``max_disparities``: the limits of a command that generates hardware
+    (:mod:`npstereo.hdl.plan`), named in the help; the golden model has none.
+    """
     count = "+" if many else None
     parser.add_argument("--transform", nargs=count, choices=TRANSFORMS,
                         default=["census"] if many else "census",
                         help="non-parametric transform (default census)")
     parser.add_argument("--block", nargs=count, type=int, default=[9] if many else 9,
-                        help="transform window size B, odd >= 3 (default 9)")
+                        help="transform window size B, odd >= 3"
+                             + (f", at most {max_block}" if max_block else "") + " (default 9)")
     parser.add_argument("--disparities", type=int, default=100,
-                        help="disparity range D >= 2 (default 100, as in the paper)")
+                        help="disparity range D >= 2"
+                             + (f", at most {max_disparities}" if max_disparities else "")
+                             + " (default 100, as in the paper)")
     parser.add_argument("--rounds", type=int, default=1,
                         help="calculation rounds R, must divide D (default 1)")
     parser.add_argument("--aggregation", type=int, default=3,

@@ -12,13 +12,14 @@ from pathlib import Path
 import numpy as np
 
 from ..golden.data import load_middlebury
-from ..golden.params import TRANSFORMS, StereoParams, UserError
 from ..golden.quality import evaluate
 from ..golden.synthetic import synthetic_pair
+from ..params import TRANSFORMS, StereoParams, UserError
 from .atomic import write_text
 from .cmd_eval import Condition, condition_images, run_jobs
 from .cmd_match import check_output_folder, output_errors
-from .plots import disparity_grid, plot_series, save_disparity_png
+from .images import save_disparity_png
+from .plots import disparity_grid, plot_series
 
 __all__ = ["add_parser", "run", "PAPER_FIG6", "PAPER_FIG8", "BLOCKS", "paper_sweep"]
 

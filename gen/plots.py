@@ -1,43 +1,21 @@
-"""PNG output shared by the commands: colour-mapped disparity maps and result plots.
+"""Figures of the commands' results: quality plots, disparity map grids, resource plots.
 
-Every file is written through :mod:`npstereo.gen.atomic`, so an interrupted command never
-leaves a torn PNG behind.
+matplotlib figures (no pyplot state), written through :mod:`npstereo.gen.atomic` so an
+interrupted command never leaves a torn PNG behind. Single disparity maps and gray images
+are written by :mod:`.images`, without matplotlib.
 """
 
+from pathlib import Path
+
 import numpy as np
-from matplotlib import colormaps
 from matplotlib.figure import Figure
-from PIL import Image
 
+from ..params import TRANSFORMS
 from .atomic import atomic_path
+from .images import colour_disparity
+from .paper_resources import PAPER_BLOCKS, PAPER_CLOCK, PAPER_LOGIC, PAPER_MEMORY
 
-__all__ = ["colour_disparity", "save_disparity_png", "save_gray_png", "save_figure",
-           "plot_series", "disparity_grid"]
-
-#: Perceptually ordered map: near (large disparity) is red, far is blue.
-COLOURMAP = "turbo"
-
-
-def colour_disparity(disparity, max_disparity):
-    """RGB uint8 rendering of a disparity map; invalid (negative or NaN) pixels are black."""
-    disparity = np.asarray(disparity, dtype=np.float64)
-    invalid = ~np.isfinite(disparity) | (disparity < 0)
-    scaled = np.clip(np.nan_to_num(disparity) / max(max_disparity, 1), 0.0, 1.0)
-    rgb = (colormaps[COLOURMAP](scaled)[..., :3] * 255 + 0.5).astype(np.uint8)
-    rgb[invalid] = 0
-    return rgb
-
-
-def save_disparity_png(path, disparity, max_disparity):
-    """Write ``disparity`` as a colour PNG (0 .. max_disparity mapped by COLOURMAP)."""
-    with atomic_path(path, suffix=".png") as tmp:
-        Image.fromarray(colour_disparity(disparity, max_disparity)).save(tmp, format="PNG")
-
-
-def save_gray_png(path, image):
-    """Write an 8-bit gray or RGB image as PNG."""
-    with atomic_path(path, suffix=".png") as tmp:
-        Image.fromarray(np.asarray(image, dtype=np.uint8)).save(tmp, format="PNG")
+__all__ = ["save_figure", "plot_series", "disparity_grid", "sweep_plots"]
 
 
 def save_figure(path, figure):
@@ -94,3 +72,60 @@ def disparity_grid(path, title, columns, rows, max_disparity):
                 axes.set_ylabel(label, fontsize=8)
     figure.suptitle(title, fontsize=9)
     save_figure(path, figure)
+
+
+def sweep_plots(reports, out):
+    """PNG plots of a resource sweep: logic, memory and (if placed and routed) clock
+    against block size, ours solid and the paper's dashed in the same colour.
+
+    Parameters
+    ----------
+    reports : list of dict
+        The sweep's reports (``npstereo report``'s JSON).
+    out : path
+        Folder for ``logic.png``, ``memory.png`` and ``fmax.png``.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    colours = dict(zip(TRANSFORMS, ("tab:blue", "tab:orange", "tab:green", "tab:red")))
+    panels = [("logic", "cyclonev", "logic", PAPER_LOGIC,
+               "logic (ours: Cyclone V ALUTs, paper: Stratix II LEs)"),
+              ("memory", "cyclonev", "memory_bits", PAPER_MEMORY, "memory bits")]
+    if any(r["results"].get("ecp5", {}).get("fmax_mhz") for r in reports):
+        panels.append(("fmax", "ecp5", "fmax_mhz", None, "clock MHz (ours: ECP5 nextpnr)"))
+    written = []
+    for name, target, key, figures, label in panels:
+        figure = Figure(figsize=(7, 4.5))
+        axes = figure.add_subplot()
+        for transform in TRANSFORMS:
+            points = [(r["params"]["block"], r["results"][target][key]) for r in reports
+                      if r["params"]["transform"] == transform
+                      and r["results"].get(target, {}).get("status") == "ok"
+                      and r["results"][target].get(key) is not None]
+            if points:
+                axes.plot(*zip(*points), "o-", color=colours[transform], label=f"{transform} (ours)")
+            if figures is not None:
+                values = [(b, v) for b, v in zip(PAPER_BLOCKS, figures[transform])
+                          if v is not None]
+                axes.plot(*zip(*values), "x--", color=colours[transform], alpha=0.6,
+                          label=f"{transform} (paper)")
+        if name == "fmax":
+            axes.plot(list(PAPER_CLOCK), list(PAPER_CLOCK.values()), "ks--",
+                      label="paper")
+        if name == "logic":
+            axes.set_yscale("log")  # ext. census is ten times the others
+        axes.set_xlabel("block size B")
+        axes.set_ylabel(label)
+        axes.set_xticks(PAPER_BLOCKS)
+        axes.grid(alpha=0.3)
+        axes.legend(fontsize=7, ncol=2)
+        axes.set_title(f"{label}, 450x375, D=100, R=10")
+        figure.tight_layout()
+        target_path = Path(out) / f"{name}.png"
+        with atomic_path(target_path) as tmp:
+            figure.savefig(tmp, dpi=110)
+        written.append(target_path)
+    return written

@@ -27,7 +27,7 @@ import time
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from ..golden.params import UserError
+from ..params import UserError
 
 __all__ = ["TARGETS", "ToolError", "tool_versions", "synthesise", "memory_cells_bits"]
 

@@ -3,7 +3,7 @@
 Every loader returns a :class:`StereoPair` whose ground truth is a float disparity map in
 pixels of the returned images, NaN where it is unknown. Every problem a user can fix (a
 missing folder, an unreadable image, a size mismatch, an unexpected ground-truth format)
-is raised as a one-line :class:`~npstereo.golden.params.UserError`.
+is raised as a one-line :class:`~npstereo.params.UserError`.
 
 Scale conventions (what the loaders assume):
 
@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-from .params import UserError
+from ..params import UserError
 
 __all__ = ["StereoPair", "to_gray", "read_image", "read_pfm", "load_middlebury", "LAYOUTS"]
 

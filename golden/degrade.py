@@ -6,7 +6,7 @@ independent noise drawn from one generator (left first).
 
 import numpy as np
 
-from .params import UserError
+from ..params import UserError
 
 __all__ = ["gaussian_noise", "gaussian_noise_pair", "bayer_mosaic", "bayer_pair"]
 

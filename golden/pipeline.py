@@ -16,7 +16,7 @@ import numpy as np
 from .aggregation import aggregate
 from .lr_check import invalidate_border, lr_check
 from .matching_cost import cost_dtype, matching_costs
-from .params import ParameterError
+from ..params import ParameterError
 from .transform import transform
 from .wta import RightWTA, evaluate_partitions, wta_partition
 

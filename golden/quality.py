@@ -4,7 +4,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .params import UserError
+from ..params import UserError
 
 __all__ = ["Quality", "evaluate"]
 

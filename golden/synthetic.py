@@ -13,7 +13,7 @@ front-most layer at every left pixel (occluded pixels keep their true disparity)
 import numpy as np
 
 from .data import StereoPair
-from .params import UserError
+from ..params import UserError
 
 __all__ = ["synthetic_pair", "DEFAULT_SIZE", "DEFAULT_DISPARITIES"]
 

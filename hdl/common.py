@@ -1,4 +1,5 @@
-"""Pieces shared by the pipeline stages: the position tag and enable-gated delay lines.
+"""Pieces shared by the pipeline stages: the position tag, enable-gated delay lines, and the
+two primitives several stages compute (the WTA's tie rule and the absolute difference).
 
 Every stage carries, next to its data, the *tag* of the position the data belongs to
 (centre column ``x``, row ``y``, calculation ``round`` and ``live``). Stages derive every
@@ -7,10 +8,11 @@ before, so stale contents (previous frame, reset in mid-frame, dummy flush posit
 can never leak into a result.
 """
 
-from amaranth.hdl import Signal, signed, unsigned
+from amaranth.hdl import Mux, Signal, signed, unsigned
 from amaranth.lib import data
 
-__all__ = ["bits_for", "tag_layout", "delay", "y_range"]
+__all__ = ["bits_for", "tag_layout", "delay", "y_range", "column_inside", "better",
+           "absolute_difference"]
 
 
 def bits_for(maximum):
@@ -51,3 +53,32 @@ def delay(m, en, value, steps, name):
             m.d.sync += reg.eq(value)
         value = reg
     return value
+
+
+def column_inside(x, offset, width):
+    """Column ``x + offset`` lies inside the frame, for a column counter ``x`` that is
+    always in 0 .. W-1 (so only one side can fail, and offset 0 never does)."""
+    if offset < 0:
+        return x >= -offset
+    return x < width - offset if offset > 0 else 1
+
+
+def better(candidate, best):
+    """The tie rule of every WTA: a candidate replaces the best so far only if strictly
+    smaller.
+
+    Candidates are visited (or, in a tree, paired) in increasing disparity order, so among
+    equal costs the lowest disparity stays, as in the golden model's ``wta._better``.
+    """
+    return candidate < best
+
+
+def absolute_difference(a, b):
+    """Eq. 6: |a - b| of two unsigned values, as wide as the wider operand.
+
+    Both differences and a select: yosys shares the ``<`` with the borrow of one of the
+    subtractors (8 CCU2C + 7 LUT4 for 8 bits on ECP5, the cheapest of the forms tried,
+    including a conditional negation).
+    """
+    width = max(len(a), len(b))
+    return Mux(b < a, (a - b)[:width], (b - a)[:width])

@@ -19,23 +19,19 @@ from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..golden.params import ParameterError
+from ..params import ParameterError
 from .calculation_stage import CalculationStage
 from .common import bits_for
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
+from .plan import check_buildable, latency, output_width
 from .trees import DEFAULT_EVERY
 
-__all__ = ["NpStereoCore", "output_width"]
+__all__ = ["NpStereoCore"]
 
 #: Framing states (see the module docstring).
 IDLE, FRAME, FILL, FLUSH = range(4)
-
-
-def output_width(params):
-    """Width of ``m_axis_tdata``: disparity bits plus the valid flag, in whole bytes."""
-    return 8 * -(-(params.disparity_bits + 1) // 8)
 
 
 class NpStereoCore(wiring.Component):
@@ -44,7 +40,8 @@ class NpStereoCore(wiring.Component):
     Parameters
     ----------
     params : StereoParams
-        Must have ``width`` and ``height`` (else :class:`ParameterError`).
+        Must have ``width`` and ``height`` within the hardware's limits (else
+        :class:`~npstereo.params.ParameterError`, see :func:`~.plan.check_buildable`).
     every : int
         Register spacing of the trees (see :mod:`.trees`).
 
@@ -56,13 +53,19 @@ class NpStereoCore(wiring.Component):
         Output stream, ``{valid, 0..., disparity}``.
     framing_error : Out(1)
         One-clock pulse per framing error (registered).
+    latency : int
+        Positions from a pixel's entry to its output word without stalls
+        (:func:`~.plan.latency`).
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
-        if params.width is None or params.height is None:
+        try:
+            check_buildable(params)
+        except ParameterError:
             self._MustUse__silence = True  # never elaborated: no "unused" warning
-            raise ParameterError("the hardware needs the image size: give width and height")
+            raise
         self.params = params
+        self.latency = latency(params, every)
         self.input_stage = InputStage(params)
         self.calculation_stage = CalculationStage(params, every)
         self.evaluation_stage = EvaluationStage(params)
@@ -74,16 +77,6 @@ class NpStereoCore(wiring.Component):
             "m_axis_tready": In(1), "m_axis_tuser": Out(1), "m_axis_tlast": Out(1),
             "framing_error": Out(1),
         })
-
-    @property
-    def latency(self):
-        """Positions from a pixel's entry to its output word (without stalls)."""
-        positions, clocks = self.calculation_stage.latency
-        p = self.params
-        # The aggregation window centre trails the newest costs by a rows and a columns.
-        clocks += self.lr_check.clock_latency
-        return (self.input_stage.latency + positions + -(-clocks // p.rounds)
-                + p.agg_radius * (p.width + 1) + self.lr_check.latency)
 
     def elaborate(self, platform):
         p = self.params

@@ -9,14 +9,9 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .common import bits_for, tag_layout
+from .common import better, bits_for, tag_layout
 
 __all__ = ["EvaluationStage"]
-
-
-def _better(candidate, best):
-    """A later partition replaces the running winner only if strictly better."""
-    return candidate < best
 
 
 class EvaluationStage(wiring.Component):
@@ -53,7 +48,8 @@ class EvaluationStage(wiring.Component):
         m = Module()
         best_cost = Signal.like(self.cost)
         best_disparity = Signal.like(self.disparity)
-        take = (self.tag.round == 0) | _better(self.cost, best_cost)
+        # A later partition replaces the running winner only if strictly better.
+        take = (self.tag.round == 0) | better(self.cost, best_cost)
         cost = Mux(take, self.cost, best_cost)
         disparity = Mux(take, self.disparity, best_disparity)
         with m.If(self.en):

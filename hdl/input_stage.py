@@ -15,9 +15,15 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import tag_layout, y_range
+from .common import column_inside, tag_layout, y_range
+from .plan import input_latency
 
 __all__ = ["InputStage"]
+
+
+def _row_inside(y, offset, height):
+    """Window row ``offset`` (-r .. r) of a centre in row ``y`` lies inside the frame."""
+    return (y >= -offset) & (y < height - offset)
 
 
 class InputStage(wiring.Component):
@@ -41,12 +47,13 @@ class InputStage(wiring.Component):
     tag : Out(tag_layout)
         Centre of the windows; ``round`` is 0 (positions have no rounds here).
     latency : int
-        Positions from a pixel's entry to the window centred on it: r * W + r.
+        Positions from a pixel's entry to the window centred on it: r * W + r
+        (:func:`~.plan.input_latency`).
     """
 
     def __init__(self, params):
         self.params = params
-        self.latency = params.radius * params.width + params.radius
+        self.latency = input_latency(params)
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
         super().__init__({
             "left": In(8), "right": In(8), "advance": In(1), "start": In(1),
@@ -95,10 +102,8 @@ class InputStage(wiring.Component):
         col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
         for k, offset in enumerate(range(-r, r + 1)):
             with m.If(self.advance):
-                m.d.sync += row_ok[k].eq((next_y >= -offset) & (next_y < height - offset))
-                # The column counter is always in 0 .. W-1: only one side can fail.
-                m.d.sync += col_ok[k].eq(next_x >= -offset if offset < 0 else
-                                         next_x < width - offset if offset > 0 else 1)
+                m.d.sync += row_ok[k].eq(_row_inside(next_y, offset, height))
+                m.d.sync += col_ok[k].eq(column_inside(next_x, offset, width))
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
                 for row in range(block)]
         m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])

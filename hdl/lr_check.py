@@ -21,9 +21,16 @@ from amaranth.hdl import Array, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from .common import bits_for, tag_layout
+from .common import absolute_difference, better, bits_for, tag_layout
+from .plan import LR_CLOCK_LATENCY, lr_latency
 
 __all__ = ["LRCheck"]
+
+
+def _consistent(difference, threshold):
+    """The consistency test: |dL - dR| <= T keeps the pixel, as in the golden model's
+    :func:`~npstereo.golden.lr_check.lr_check`."""
+    return difference <= threshold
 
 
 class LRCheck(wiring.Component):
@@ -43,16 +50,16 @@ class LRCheck(wiring.Component):
         The result and its position.
     latency : int
         Positions from the evaluation stage's result to ``produce``: D + 1 with the check,
-        0 without, ...
+        0 without (:func:`~.plan.lr_latency`), ...
     clock_latency : int
-        ... and then 1 clock (the output register stage).
+        ... and then 1 clock, the output register stage (:data:`~.plan.LR_CLOCK_LATENCY`).
     """
 
-    clock_latency = 1
+    clock_latency = LR_CLOCK_LATENCY
 
     def __init__(self, params):
         self.params = params
-        self.latency = params.disparities + 1 if params.lr_check else 0
+        self.latency = lr_latency(params)
         d_bits = bits_for(params.disparities - 1)
         layout = tag_layout(params)
         super().__init__({
@@ -107,9 +114,10 @@ class LRCheck(wiring.Component):
         def candidate(k, base):
             """Slot k's value after the candidate d = k of this round (if xr >= 0)."""
             cost = self.costs[k % per_round]
-            better = (self.tag.x >= k) & (cost < base.cost)
-            return [slots[k].cost.eq(Mux(better, cost, base.cost)),
-                    slots[k].d.eq(Mux(better, k, base.d))]
+            # Candidates come in increasing d: ties keep the lowest.
+            take = (self.tag.x >= k) & better(cost, base.cost)
+            return [slots[k].cost.eq(Mux(take, cost, base.cost)),
+                    slots[k].d.eq(Mux(take, k, base.d))]
 
         with m.If(self.en & first_round):
             # New position: shift; slot 0 (xr = x) starts with d = 0, always in the row.
@@ -139,8 +147,8 @@ class LRCheck(wiring.Component):
             m.d.sync += staged_partner.eq(partner)
 
         def keep(tag, d):
-            difference = Mux(d > staged_partner, d - staged_partner, staged_partner - d)
-            return (tag.x >= d) & (difference <= p.lr_threshold)
+            difference = absolute_difference(d, staged_partner)
+            return (tag.x >= d) & _consistent(difference, p.lr_threshold)
 
         self._report(m, entry.tag, entry.d, first_round, keep)
         return m

@@ -10,9 +10,9 @@ from amaranth.hdl import Module, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .transform import absolute_difference
-from .trees import DEFAULT_EVERY, build_popcount, build_sum, build_tree, popcount_plan, \
-    register_plan
+from .common import absolute_difference, delay
+from .plan import cost_plan
+from .trees import DEFAULT_EVERY, build_popcount, build_sum
 
 __all__ = ["MatchingCost"]
 
@@ -39,15 +39,13 @@ class MatchingCost(wiring.Component):
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
-        self.params, self.every = params, every
-        self._cost, self.latency = {
-            "rank": (self._rank_cost, self._single_stage_latency()),
-            "ext-rank": (self._rank_cost, self._single_stage_latency()),
-            "census": (self._census_cost,
-                       sum(popcount_plan(params.neighbours, every, 0, every > 0))),
-            "ext-census": (self._ext_census_cost,
-                           sum(register_plan(params.neighbours, every, 1, every > 0))),
-        }[params.transform]
+        self.params = params
+        #: Register plan (:func:`~.plan.cost_plan`): where the registers go.
+        self.plan = cost_plan(params, every)
+        self.latency = sum(self.plan)
+        self._cost = {"rank": self._rank_cost, "ext-rank": self._rank_cost,
+                      "census": self._census_cost,
+                      "ext-census": self._ext_census_cost}[params.transform]
         super().__init__({
             "left": In(unsigned(params.transform_bits)),
             "right": In(unsigned(params.transform_bits)),
@@ -55,13 +53,9 @@ class MatchingCost(wiring.Component):
             "cost": Out(unsigned(params.cost_bits)),
         })
 
-    def _single_stage_latency(self):
-        return sum(register_plan(1, self.every, 1, self.every > 0))
-
     def _rank_cost(self, m):
-        plan = register_plan(1, self.every, 1, self.every > 0)
-        value = absolute_difference(self.left, self.right)
-        return build_tree(m, self.en, [(value,)], None, plan)[0]
+        return delay(m, self.en, absolute_difference(self.left, self.right), self.latency,
+                     "rank_cost")
 
     def _census_cost(self, m):
         # A named signal: slicing a bare expression would copy the whole wide XOR into
@@ -71,13 +65,13 @@ class MatchingCost(wiring.Component):
         bits = [differing[n] for n in range(self.params.neighbours)]
         # One LUT level in front of the compressors, far shorter than an adder level: not
         # counted against the register spacing.
-        return build_popcount(m, self.en, bits, self.every, 0, self.every > 0)
+        return build_popcount(m, self.en, bits, self.plan)
 
     def _ext_census_cost(self, m):
         differences = [absolute_difference(self.left.word_select(n, 8),
                                            self.right.word_select(n, 8))
                        for n in range(self.params.neighbours)]
-        return build_sum(m, self.en, differences, self.every, 1, self.every > 0)
+        return build_sum(m, self.en, differences, self.plan)
 
     def elaborate(self, platform):
         m = Module()

@@ -1,7 +1,7 @@
 """Transformation in hardware: the four non-parametric transforms of one B x B window.
 
 Mirrors :mod:`npstereo.golden.transform` (Eq. 1, 2, 4, 6, 7, 8): :func:`xi` and
-:func:`absolute_difference` are the per-neighbour primitives, :class:`Rank`, :class:`Census`,
+:func:`~.common.absolute_difference` are the per-neighbour primitives, :class:`Rank`, :class:`Census`,
 :class:`ExtRank` and :class:`ExtCensus` the transforms, :class:`Transform` picks one from the
 parameters. The window arrives already masked (pixels outside the frame are 0), row-major:
 pixel (dy, dx) is element (dy + r) * B + (dx + r); neighbours are numbered in the same
@@ -11,14 +11,15 @@ Each component computes one window per ``en``-high clock; pipeline registers (se
 :mod:`.trees`) advance only while ``en`` is high, and ``latency`` counts them.
 """
 
-from amaranth.hdl import Cat, Module, Mux, unsigned
+from amaranth.hdl import Cat, Module, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from .trees import DEFAULT_EVERY, build_popcount, build_sum, build_tree, popcount_plan, \
-    register_plan
+from .common import absolute_difference, delay
+from .plan import transform_plan
+from .trees import DEFAULT_EVERY, build_popcount, build_sum
 
-__all__ = ["xi", "absolute_difference", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
+__all__ = ["xi", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
 
 
 def xi(centre, neighbour):
@@ -29,17 +30,6 @@ def xi(centre, neighbour):
     14 LUT4 per 8-bit compare).
     """
     return neighbour < centre
-
-
-def absolute_difference(a, b):
-    """Eq. 6: |a - b| of two unsigned values, as wide as the wider operand.
-
-    Both differences and a select: yosys shares the ``<`` with the borrow of one of the
-    subtractors (8 CCU2C + 7 LUT4 for 8 bits on ECP5, the cheapest of the forms tried,
-    including a conditional negation).
-    """
-    width = max(len(a), len(b))
-    return Mux(b < a, (a - b)[:width], (b - a)[:width])
 
 
 class _WindowTransform(wiring.Component):
@@ -62,8 +52,10 @@ class _WindowTransform(wiring.Component):
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
-        self.params, self.every = params, every
-        self.latency = self._latency()
+        self.params = params
+        #: Register plan (:func:`~.plan.transform_plan`): where the registers go.
+        self.plan = transform_plan(params, every)
+        self.latency = sum(self.plan)
         super().__init__({
             "window": In(data.ArrayLayout(unsigned(8), params.block * params.block)),
             "en": In(1),
@@ -76,14 +68,6 @@ class _WindowTransform(wiring.Component):
         neighbours = [self.window[i] for i in range(block * block) if i != centre_index]
         return self.window[centre_index], neighbours
 
-    def _single_stage_latency(self):
-        # One level of logic (compare or |difference|), then the output register.
-        return sum(register_plan(1, self.every, 1, self.every > 0))
-
-    def _single_stage(self, m, value):
-        plan = register_plan(1, self.every, 1, self.every > 0)
-        return build_tree(m, self.en, [(value,)], None, plan)[0]
-
     def elaborate(self, platform):
         m = Module()
         centre, neighbours = self._centre_and_neighbours()
@@ -94,43 +78,32 @@ class _WindowTransform(wiring.Component):
 class Rank(_WindowTransform):
     """Eq. 2: number of neighbours darker than the centre (compares, then a popcount)."""
 
-    def _latency(self):
-        return sum(popcount_plan(self.params.neighbours, self.every, 1, self.every > 0))
-
     def _value(self, m, centre, neighbours):
-        bits = [xi(centre, p) for p in neighbours]
-        return build_popcount(m, self.en, bits, self.every, 1, self.every > 0)
+        return build_popcount(m, self.en, [xi(centre, p) for p in neighbours], self.plan)
 
 
 class Census(_WindowTransform):
-    """Eq. 4: bit n is the comparison with neighbour n."""
-
-    def _latency(self):
-        return self._single_stage_latency()
+    """Eq. 4: bit n is the comparison with neighbour n (then the output register)."""
 
     def _value(self, m, centre, neighbours):
-        return self._single_stage(m, Cat(xi(centre, p) for p in neighbours))
+        return delay(m, self.en, Cat(xi(centre, p) for p in neighbours), self.latency,
+                     "census")
 
 
 class ExtRank(_WindowTransform):
     """Eq. 7: sum of |P - P'| over the neighbours (differences, then an adder tree)."""
 
-    def _latency(self):
-        return sum(register_plan(self.params.neighbours, self.every, 1, self.every > 0))
-
     def _value(self, m, centre, neighbours):
         differences = [absolute_difference(centre, p) for p in neighbours]
-        return build_sum(m, self.en, differences, self.every, 1, self.every > 0)
+        return build_sum(m, self.en, differences, self.plan)
 
 
 class ExtCensus(_WindowTransform):
-    """Eq. 8: byte n (bits 8n+7..8n) is |P - P'_n|."""
-
-    def _latency(self):
-        return self._single_stage_latency()
+    """Eq. 8: byte n (bits 8n+7..8n) is |P - P'_n| (then the output register)."""
 
     def _value(self, m, centre, neighbours):
-        return self._single_stage(m, Cat(absolute_difference(centre, p) for p in neighbours))
+        return delay(m, self.en, Cat(absolute_difference(centre, p) for p in neighbours),
+                     self.latency, "ext_census")
 
 
 _TRANSFORMS = {"rank": Rank, "census": Census, "ext-rank": ExtRank, "ext-census": ExtCensus}

@@ -19,6 +19,8 @@ from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from .common import better
+
 __all__ = ["DEFAULT_EVERY", "tree_levels", "register_plan", "popcount_plan", "build_tree",
            "build_sum", "build_popcount", "full_adder_compress", "AdderTree", "PopCount",
            "MinTree"]
@@ -150,28 +152,24 @@ def popcount_plan(width, every, depth=0, register_output=False):
     return register_plan((width + 2) // 3, every, depth + 1, register_output)
 
 
-def build_popcount(m, en, bits, every, depth=0, register_output=False):
+def build_popcount(m, en, bits, plan):
     """Number of ones in ``bits``: full adders, then an adder tree of growing width.
 
-    Returns the count; its latency is ``sum(popcount_plan(...))`` with the same arguments.
+    ``plan`` comes from :func:`popcount_plan` for ``len(bits)`` bits; its sum is the latency.
     """
-    plan = popcount_plan(len(bits), every, depth, register_output)
     return build_tree(m, en, [(c,) for c in full_adder_compress(list(bits))], _add, plan)[0]
 
 
-def build_sum(m, en, values, every, depth=0, register_output=False):
-    """Sum of ``values`` by an adder tree; latency ``sum(register_plan(len(values), ...))``."""
-    plan = register_plan(len(values), every, depth, register_output)
+def build_sum(m, en, values, plan):
+    """Sum of ``values`` by an adder tree; ``plan`` from :func:`register_plan` for
+    ``len(values)`` leaves, its sum is the latency."""
     return build_tree(m, en, [(v,) for v in values], _add, plan)[0]
 
 
-def _takes_upper(lower, upper):
-    """The upper-index candidate wins only if strictly smaller: ties keep the lowest index."""
-    return upper < lower
-
-
 def _select_min(lower, upper):
-    upper_wins = _takes_upper(lower[0], upper[0])
+    # The upper-index candidate is the later one: it wins only if strictly better, so ties
+    # keep the lowest index.
+    upper_wins = better(upper[0], lower[0])
     return (Mux(upper_wins, upper[0], lower[0]), Mux(upper_wins, upper[1], lower[1]))
 
 
@@ -197,8 +195,9 @@ class AdderTree(wiring.Component):
     """
 
     def __init__(self, count, width, every=DEFAULT_EVERY):
-        self.count, self.width, self.every = count, width, every
-        self.latency = sum(register_plan(count, every))
+        self.count, self.width = count, width
+        self.plan = register_plan(count, every)
+        self.latency = sum(self.plan)
         super().__init__({
             "inputs": In(data.ArrayLayout(unsigned(width), count)),
             "en": In(1),
@@ -208,7 +207,7 @@ class AdderTree(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         values = [self.inputs[i] for i in range(self.count)]
-        m.d.comb += self.sum.eq(build_sum(m, self.en, values, self.every))
+        m.d.comb += self.sum.eq(build_sum(m, self.en, values, self.plan))
         return m
 
 
@@ -231,8 +230,9 @@ class PopCount(wiring.Component):
     """
 
     def __init__(self, width, every=DEFAULT_EVERY):
-        self.width_in, self.every = width, every
-        self.latency = sum(popcount_plan(width, every))
+        self.width_in = width
+        self.plan = popcount_plan(width, every)
+        self.latency = sum(self.plan)
         super().__init__({
             "bits": In(width),
             "en": In(1),
@@ -242,7 +242,7 @@ class PopCount(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         bits = [self.bits[i] for i in range(self.width_in)]
-        m.d.comb += self.count.eq(build_popcount(m, self.en, bits, self.every))
+        m.d.comb += self.count.eq(build_popcount(m, self.en, bits, self.plan))
         return m
 
 
@@ -270,8 +270,9 @@ class MinTree(wiring.Component):
     """
 
     def __init__(self, count, width, every=DEFAULT_EVERY):
-        self.count, self.width, self.every = count, width, every
-        self.latency = sum(register_plan(count, every))
+        self.count, self.width = count, width
+        self.plan = register_plan(count, every)
+        self.latency = sum(self.plan)
         super().__init__({
             "values": In(data.ArrayLayout(unsigned(width), count)),
             "en": In(1),
@@ -283,7 +284,6 @@ class MinTree(wiring.Component):
         m = Module()
         index_shape = self.index.shape()
         leaves = [(self.values[i], Const(i, index_shape)) for i in range(self.count)]
-        plan = register_plan(self.count, self.every)
-        value, index = build_tree(m, self.en, leaves, _select_min, plan)
+        value, index = build_tree(m, self.en, leaves, _select_min, self.plan)
         m.d.comb += [self.min.eq(value), self.index.eq(index)]
         return m

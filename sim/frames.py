@@ -1,20 +1,18 @@
 """Pixel words in and out of the core, and the bit-exact comparison with the golden model.
 
-Pure numpy, shared by the cocotb test modules (inside the simulator process) and by the
-command line / pytest side, so both report mismatches in exactly the same words.
+Numpy and the hardware's word width (:func:`npstereo.hdl.plan.output_width`), shared by
+the cocotb test modules (inside the simulator process) and by the command line / pytest
+side, so both report mismatches in exactly the same words.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["output_bits", "input_words", "expected_words", "decode_word", "decode_map",
-           "Comparison", "compare_frame"]
+from ..hdl.plan import output_width
 
-
-def output_bits(params):
-    """Width N of ``m_axis_tdata``: the disparity bits plus the valid flag, whole bytes."""
-    return 8 * -(-(params.disparity_bits + 1) // 8)
+__all__ = ["input_words", "expected_words", "decode_word", "decode_map", "Comparison",
+           "compare_frame"]
 
 
 def input_words(left, right):
@@ -25,14 +23,14 @@ def input_words(left, right):
 def expected_words(disparity, params):
     """The words the core must emit for a golden map (-1 = invalid: all bits 0)."""
     valid = disparity >= 0
-    words = np.where(valid, disparity.astype(np.int64) | (1 << (output_bits(params) - 1)), 0)
+    words = np.where(valid, disparity.astype(np.int64) | (1 << (output_width(params) - 1)), 0)
     return words.astype(np.int64).ravel()
 
 
 def decode_word(word, params):
     """A readable value for a mismatch report: the disparity, -1 for invalid, "X" for an
     undefined word (negative: how the harness marks x/z), else the raw word in hex."""
-    flag = 1 << (output_bits(params) - 1)
+    flag = 1 << (output_width(params) - 1)
     word = int(word)
     if word < 0:
         return "X"   # undefined (x/z) bits in the simulator
@@ -50,7 +48,7 @@ def decode_map(words, params):
     """
     pixels = params.width * params.height
     words = np.asarray(words, dtype=np.int64)[:pixels]
-    flag = 1 << (output_bits(params) - 1)
+    flag = 1 << (output_width(params) - 1)
     disparity = np.full(pixels, -1, dtype=np.int16)
     valid = (words >= 0) & ((words & flag) != 0)
     disparity[:words.size][valid] = (words[valid] & ((1 << params.disparity_bits) - 1))

@@ -8,6 +8,8 @@ import os
 import shutil
 from pathlib import Path
 
+from ..params import UserError
+
 __all__ = ["VERILATOR_WAIVERS", "verilator_bin_dir", "tool_env", "require"]
 
 #: Width and style warnings Amaranth's generated Verilog trips; waived for lint and builds.
@@ -42,7 +44,6 @@ def use_project_tools():
 
 def require(tool):
     """Absolute path of ``tool`` on the project's PATH, or a one-line error naming it."""
-    from ..golden.params import UserError
     path = shutil.which(tool, path=tool_env()["PATH"])
     if path is None:
         hint = {"iverilog": "install Icarus Verilog (make test installs it with apt-get)",

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from npstereo.golden.data import load_middlebury, to_gray
-from npstereo.golden.params import StereoParams, UserError
+from npstereo.params import StereoParams, UserError
 from npstereo.golden.pipeline import disparity_map
 from npstereo.sim.cosim import CosimError, run_frame
 
@@ -27,12 +27,11 @@ def measure(simulator, params, left, right, build_root):
     golden = disparity_map(left, right, params).disparity
     golden_seconds = time.perf_counter() - start
     start = time.perf_counter()
-    result, model = run_frame(simulator, params, left, right, golden=golden,
-                              build_root=build_root)
+    result = run_frame(simulator, params, left, right, golden=golden, build_root=build_root)
     total = time.perf_counter() - start
     _, comparison = result.frames[0]
     verdict = "bit-exact" if comparison.ok else comparison.message()
-    print(f"{simulator:9s} {params.width}x{params.height}: build {model.seconds:6.1f} s, "
+    print(f"{simulator:9s} {params.width}x{params.height}: build {result.build_seconds:6.1f} s, "
           f"simulation {result.seconds:6.1f} s, total {total:6.1f} s "
           f"(+ golden {golden_seconds:.1f} s); {result.cycles} cycles "
           f"({result.cycles / max(result.seconds, 1e-9) / 1e3:.0f} k cycles/s); "

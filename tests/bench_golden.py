@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from npstereo.golden.params import StereoParams
+from npstereo.params import StereoParams
 from npstereo.golden.pipeline import disparity_map
 
 #: (transform, block, target seconds or None), all at D = 100 with the L/R check (T = 3).

@@ -20,8 +20,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from npstereo.gen.verilog import core_verilog, lint
-from npstereo.golden.params import StereoParams, UserError
+from npstereo.hdl.verilog import core_verilog
+from npstereo.params import StereoParams, UserError
+from npstereo.sim.lint import lint
 
 TIMED = [("census", 19), ("ext-census", 19), ("census", 9)]
 

@@ -8,10 +8,10 @@ synthesis needs no images.
 import argparse
 import time
 
-from npstereo.gen.cmd_report import cycles_per_frame, expected_memory_bits
 from npstereo.gen.synth import TARGETS, synthesise
-from npstereo.gen.verilog import TOP_NAME, core_verilog
-from npstereo.golden.params import TRANSFORMS, StereoParams
+from npstereo.hdl.plan import cycles_per_frame, memory_bits
+from npstereo.hdl.verilog import TOP_NAME, core_verilog
+from npstereo.params import TRANSFORMS, StereoParams
 
 
 def main():
@@ -34,7 +34,7 @@ def main():
           f"R={params.rounds} {params.width}x{params.height}: Verilog generated in "
           f"{time.perf_counter() - started:.1f} s ({len(verilog.splitlines()):,} lines)")
     print(f"cycles per frame {cycles_per_frame(params):,}, memory bits expected "
-          f"{expected_memory_bits(params):,}")
+          f"{memory_bits(params):,}")
     for target in TARGETS:
         result = synthesise(verilog, target, TOP_NAME, pnr=args.pnr)
         if result["status"] != "ok":

@@ -1,7 +1,10 @@
-"""Drive ``npstereo_core`` in Amaranth's simulator: AXI4-Stream beats in, words out.
+"""Drive the core in Amaranth's simulator: input beats in, output words out.
 
 One testbench coroutine plays both the source and the sink, clock by clock, so that random
-valid gaps and random backpressure cost no extra simulator processes.
+valid gaps and random backpressure cost no extra simulator processes. It drives either
+:class:`~npstereo.hdl.core.NpStereoCore` (AXI4-Stream ports) or
+:class:`~npstereo.hdl.stream.StereoStream` (``amaranth.lib.stream`` ports) through the same
+handshakes, so both are checked by the same scenarios.
 """
 
 import random
@@ -11,9 +14,13 @@ from amaranth.hdl import ResetInserter, Signal
 from amaranth.sim import Simulator
 
 from npstereo.golden.lr_check import INVALID
+from npstereo.golden.pipeline import disparity_map
 from npstereo.hdl.core import NpStereoCore
+from npstereo.hdl.plan import output_width
+from npstereo.hdl.stream import StereoStream
 
-__all__ = ["frame_beats", "run_scenario", "decode_frames", "first_mismatch", "RESET"]
+__all__ = ["frame_beats", "run_scenario", "decode_frames", "first_mismatch", "check_frames",
+           "RESET"]
 
 #: A marker in the beat list: assert ``rst`` for one clock at this point of the input.
 RESET = "reset"
@@ -33,11 +40,52 @@ def frame_beats(left, right, *, drop_last_at=None):
     return beats
 
 
-def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None):
+class _AxiPorts:
+    """The core's own ports."""
+
+    def __init__(self, core):
+        self.core = core
+        self.in_valid, self.in_ready = core.s_axis_tvalid, core.s_axis_tready
+        self.out_valid, self.out_ready = core.m_axis_tvalid, core.m_axis_tready
+
+    def offer(self, ctx, beat):
+        data, user, last = beat
+        ctx.set(self.core.s_axis_tdata, data)
+        ctx.set(self.core.s_axis_tuser, user)
+        ctx.set(self.core.s_axis_tlast, last)
+
+    def word(self, ctx):
+        return (ctx.get(self.core.m_axis_tdata), ctx.get(self.core.m_axis_tuser),
+                ctx.get(self.core.m_axis_tlast))
+
+
+class _StreamPorts:
+    """``StereoStream``'s sink and source, beats translated to and from the core's words."""
+
+    def __init__(self, stream):
+        self.stream = stream
+        self.in_valid, self.in_ready = stream.sink.valid, stream.sink.ready
+        self.out_valid, self.out_ready = stream.source.valid, stream.source.ready
+        self.flag = 1 << (output_width(stream.params) - 1)
+
+    def offer(self, ctx, beat):
+        data, user, last = beat
+        ctx.set(self.stream.sink.payload, {"left": data & 0xFF, "right": data >> 8,
+                                           "first": user, "last": last})
+
+    def word(self, ctx):
+        beat = ctx.get(self.stream.source.payload)
+        data = (beat.disparity | self.flag) if beat.valid else beat.disparity
+        return data, beat.first, beat.last
+
+
+def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None,
+                 stream=False):
     """Feed ``beats`` (and RESET markers) through a core; collect every output word.
 
     The source keeps a beat offered until it is taken (AXI rule) but inserts random gaps
-    before offering the next; the sink drops ``tready`` at random.
+    before offering the next; the sink drops ``tready`` at random. With ``stream`` the
+    core is a :class:`StereoStream`, driven through its sink and source.
 
     Returns
     -------
@@ -46,13 +94,14 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
         ``frame_starts`` (clock of every output word with tuser), ``cycles`` (clocks until
         the last word came out), ``latency`` (the core's, in positions).
     """
-    core = NpStereoCore(params)
+    dut = StereoStream(params) if stream else NpStereoCore(params)
+    ports = _StreamPorts(dut) if stream else _AxiPorts(dut)
     rst = Signal()
-    dut = ResetInserter({"sync": rst})(core)
+    top = ResetInserter({"sync": rst})(dut)
     rng = random.Random(seed)
     words, starts, state = [], [], {"errors": 0, "cycles": 0}
     expected = sum(1 for b in beats if b != RESET)
-    slack = 4 * core.latency * params.rounds + 50
+    slack = 4 * dut.latency * params.rounds + 50
     limit = max_cycles or int((expected * params.rounds + slack * 3)
                               / min(valid_prob, ready_prob) + slack)
 
@@ -60,8 +109,8 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
         index, cycle, last_word_cycle, offering = 0, 0, 0, False
         while cycle < limit:
             if index < len(beats) and beats[index] == RESET:
-                ctx.set(core.s_axis_tvalid, 0)
-                ctx.set(core.m_axis_tready, 0)
+                ctx.set(ports.in_valid, 0)
+                ctx.set(ports.out_ready, 0)
                 ctx.set(rst, 1)
                 await ctx.tick()
                 ctx.set(rst, 0)
@@ -71,41 +120,53 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
             if not offering and index < len(beats):
                 offering = rng.random() < valid_prob
             if offering:
-                data, user, last = beats[index]
-                ctx.set(core.s_axis_tdata, data)
-                ctx.set(core.s_axis_tuser, user)
-                ctx.set(core.s_axis_tlast, last)
-            ctx.set(core.s_axis_tvalid, offering)
+                ports.offer(ctx, beats[index])
+            ctx.set(ports.in_valid, offering)
             ready = rng.random() < ready_prob
-            ctx.set(core.m_axis_tready, ready)
-            if offering and ctx.get(core.s_axis_tready):
+            ctx.set(ports.out_ready, ready)
+            if offering and ctx.get(ports.in_ready):
                 index, offering = index + 1, False
-            if ready and ctx.get(core.m_axis_tvalid):
-                word = (ctx.get(core.m_axis_tdata), ctx.get(core.m_axis_tuser),
-                        ctx.get(core.m_axis_tlast))
+            if ready and ctx.get(ports.out_valid):
+                word = ports.word(ctx)
                 words.append(word)
                 if word[1]:
                     starts.append(cycle)
                 last_word_cycle = cycle
-            state["errors"] += ctx.get(core.framing_error)
+            state["errors"] += ctx.get(dut.framing_error)
             await ctx.tick()
             cycle += 1
             if index >= len(beats) and cycle > last_word_cycle + slack:
                 break
         state["cycles"] = last_word_cycle + 1
 
-    sim = Simulator(dut)
+    sim = Simulator(top)
     sim.add_clock(1e-8)
     sim.add_testbench(bench)
     sim.run()
-    return {"words": words, "frame_starts": starts, "latency": core.latency, **state}
+    return {"words": words, "frame_starts": starts, "latency": dut.latency, **state}
+
+
+def check_frames(params, pairs, beats, **kwargs):
+    """Run ``beats``; compare the last len(pairs) output frames with the golden maps.
+
+    Fails (AssertionError) with "... pixels differ ..." naming the first differing pixel,
+    or with "only N output frames".
+    """
+    result = run_scenario(params, beats, **kwargs)
+    frames = decode_frames(result["words"], params)
+    assert len(frames) >= len(pairs), f"only {len(frames)} output frames"
+    for n, ((left, right), got) in enumerate(zip(pairs, frames[-len(pairs):])):
+        expected = disparity_map(left, right, params).disparity
+        mismatch = first_mismatch(expected, got)
+        assert mismatch is None, f"frame {n} of {params.describe()}: {mismatch}"
+    return result
 
 
 def decode_frames(words, params):
     """Split output words at ``tuser`` into H x W int16 maps (INVALID where not valid)."""
     width, height = params.width, params.height
     n_bits = params.disparity_bits
-    top = 8 * -(-(n_bits + 1) // 8) - 1
+    top = output_width(params) - 1
     frames, current = [], None
     for data, user, _ in words:
         if user:

@@ -9,7 +9,7 @@ import pytest
 from PIL import Image
 
 from npstereo.gen.cli import main
-from npstereo.golden.params import StereoParams
+from npstereo.params import StereoParams
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
 
@@ -50,7 +50,7 @@ def assert_user_error(capsys, root, argv, *words):
 
 def test_user_error_check_fails_on_a_good_command(capsys, tmp_path, pair_files):
     left, right, _ = pair_files
-    with pytest.raises(AssertionError):
+    with pytest.raises(AssertionError, match="assert 0 == 2"):
         assert_user_error(capsys, tmp_path, ["match", str(left), str(right), "--block", "5",
                                              "--disparities", str(D),
                                              "--out", str(tmp_path / "ok.png")])
@@ -75,12 +75,13 @@ def test_match_writes_png_and_raw(capsys, tmp_path, pair_files, small_pair):
 def test_match_lr_options(tmp_path, pair_files, small_pair):
     left, right, _ = pair_files
     raw = tmp_path / "n.npy"
-    main(["match", str(left), str(right), "--block", "3", "--disparities", str(D),
-          "--no-lr-check", "--out", str(tmp_path / "n.png"), "--raw", str(raw)])
+    assert main(["match", str(left), str(right), "--block", "3", "--disparities", str(D),
+                 "--no-lr-check", "--out", str(tmp_path / "n.png"), "--raw", str(raw)]) == 0
     unchecked = np.load(raw)
     assert (unchecked[:, D:] >= 0).all()
-    main(["match", str(left), str(right), "--block", "3", "--disparities", str(D),
-          "--lr-threshold", "0", "--out", str(tmp_path / "t.png"), "--raw", str(raw)])
+    assert main(["match", str(left), str(right), "--block", "3", "--disparities", str(D),
+                 "--lr-threshold", "0", "--out", str(tmp_path / "t.png"),
+                 "--raw", str(raw)]) == 0
     assert (np.load(raw)[:, D:] < 0).any()
 
 

@@ -4,42 +4,30 @@ Every output pixel is compared with the golden model inside the cocotb test (see
 ``sim/cocotb_tests.py``); a failure names the first differing pixel and the count.
 Builds are cached per configuration under ``build/cosim/<hash>/`` and shared by the tests
 of one configuration, so each Verilator model is compiled once (without C++ optimisation:
-the frames are tiny). Frames are 40 x 12.
-
-Icarus Verilog currently fails every run, for two reasons in the generated Verilog (the
-test bench itself gives identical results on both simulators with a stand-in core):
-the memory read-data registers (``reg [..] _0_;``) have no initial value, Icarus starts
-them at X and the X reaches ``m_axis_tdata``; and with those registers initialised to 0 by
-hand, Icarus still disagrees with Verilator, Amaranth's simulator and the golden model
-(census 5x5 D=8 R=2: 252 of 480 pixels differ, first at x=8 y=0). These tests are marked
-as strict expected failures: the marker must go once the core simulates correctly there.
+the frames are tiny). Frames are 40 x 12; a core generated with a broken transform
+comparison must be reported as mismatching on both simulators.
 """
 
 import numpy as np
 import pytest
 
 from npstereo.gen.cli import main
-from npstereo.golden.data import to_gray
-from npstereo.golden.params import StereoParams
-from npstereo.golden.synthetic import synthetic_pair
 from npstereo.hdl import transform as hdl_transform
 from npstereo.hdl import trees
+from npstereo.params import StereoParams
 from npstereo.sim import cosim
+from npstereo.sim.frames import compare_frame
+
+from scenes import stereo_pair
 
 WIDTH, HEIGHT = 40, 12
 
+
 def frames(params, count=2, seed=0):
-    """Synthetic scenes plus a random pair: textured, with every disparity present."""
-    pairs = []
-    for index in range(count - 1):
-        # The scene generator wants D >= 8; a scene deeper than D is still a valid input.
-        pair = synthetic_pair(width=WIDTH, height=HEIGHT,
-                              disparities=max(8, params.disparities), seed=seed + index)
-        pairs.append((to_gray(pair.left), to_gray(pair.right)))
-    rng = np.random.default_rng(seed)
-    left = rng.integers(0, 256, (HEIGHT, WIDTH), dtype=np.uint8)
-    pairs.append((left, np.roll(left, -2, axis=1)))
-    return pairs
+    """Layered scenes with tie areas, then a random pair (shifted texture with noise)."""
+    pairs = [stereo_pair("layers", HEIGHT, WIDTH, seed + index, params.disparities)
+             for index in range(count - 1)]
+    return pairs + [stereo_pair("random", HEIGHT, WIDTH, seed)]
 
 
 def config(transform, block, disparities, rounds, lr):
@@ -86,14 +74,16 @@ def test_icarus_stream(name):
     assert_bit_exact(cosim.run_stream("icarus", params, frames(params), plan))
 
 
-def test_icarus_harness_frame():
-    """The fast path (Verilog stimulus/response harness) with idle cycles and backpressure."""
+@pytest.mark.parametrize("simulator", ["verilator", "icarus"])
+def test_harness_frame(simulator):
+    """The fast path (the self-clocking Verilog harness) with idle cycles and backpressure."""
     params = config("census", 5, 8, 2, 1)
     left, right = frames(params, 1)[0]
-    result, _ = cosim.run_frame("icarus", params, left, right, idle=0.3, backpressure=0.3,
-                                optimize=False)
+    result = cosim.run_frame(simulator, params, left, right, idle=0.3, backpressure=0.3,
+                             optimize=False)
     assert_bit_exact(result)
     assert result.cycles >= WIDTH * HEIGHT * params.rounds
+    assert result.disparity.shape == (HEIGHT, WIDTH)
 
 
 @pytest.mark.parametrize("simulator", ["verilator", "icarus"])
@@ -118,7 +108,6 @@ def test_compare_reports_first_pixel_and_count():
     got[WIDTH * 4] = 0x81
     tuser = np.arange(got.size) == 0
     tlast = np.arange(got.size) % WIDTH == WIDTH - 1
-    from npstereo.sim.frames import compare_frame
     comparison = compare_frame(expected, got, tuser, tlast, params)
     assert (comparison.mismatches, comparison.first) == (2, (5, 2, -1, 3))
     short = compare_frame(expected, got[:-WIDTH], tuser, tlast, params)
@@ -159,6 +148,7 @@ def test_cli_mismatch_exits_1(tmp_path, capsys, monkeypatch):
     (["--rounds", "3"], "rounds must divide disparities"),
     (["--clock-mhz", "0"], "--clock-mhz must be > 0"),
     (["--block", "4"], "block size must be an odd integer"),
+    (["--block", "33"], "block size must be <= 31 for the hardware"),
 ])
 def test_cli_bad_input(tmp_path, capsys, args, message):
     base = ["cosim", "--simulator", "amaranth", "--synthetic", "--disparities", "8",

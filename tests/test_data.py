@@ -7,7 +7,7 @@ from PIL import Image
 from npstereo.golden import data
 from npstereo.golden.data import load_middlebury, read_pfm, to_gray
 from npstereo.golden.degrade import bayer_mosaic, bayer_pair, gaussian_noise_pair
-from npstereo.golden.params import StereoParams, UserError
+from npstereo.params import StereoParams, UserError
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair

@@ -16,42 +16,10 @@ from npstereo.golden import matching_cost as golden_cost
 from npstereo.golden import pipeline as golden_pipeline
 from npstereo.golden import transform as golden_transform
 from npstereo.golden import wta as golden_wta
-from npstereo.golden.params import TRANSFORMS, StereoParams
+from npstereo.params import TRANSFORMS, StereoParams
 
 import reference
-
-# Images ------------------------------------------------------------------------------------
-
-
-def make_pair(kind, height, width, seed):
-    """A left image and a right image that is mostly the left one shifted by 1-4 columns.
-
-    kinds: ``random`` (uniform bytes), ``levels`` (3 gray levels: ties everywhere), ``flat``
-    (constant 4 x 4 tiles, some 0 like the padding), ``stripes`` (period-3 columns: costs
-    repeat every 3 disparities), ``saturated`` (only 0 and 255: extreme ext-census bytes).
-    """
-    rng = np.random.default_rng(seed)
-    if kind == "random":
-        left = rng.integers(0, 256, (height, width))
-    elif kind == "levels":
-        left = rng.choice([0, 100, 101], (height, width))
-    elif kind == "flat":
-        tiles = rng.choice([0, 7, 200], (height // 4 + 1, width // 4 + 1))
-        left = np.kron(tiles, np.ones((4, 4), dtype=int))[:height, :width]
-    elif kind == "stripes":
-        left = np.tile(np.array([10, 50, 50]), width // 3 + 1)[None, :width].repeat(height, 0)
-        left = left + (rng.random((height, width)) < 0.05) * 30
-    elif kind == "saturated":
-        left = rng.choice([0, 255], (height, width))
-    else:
-        raise ValueError(kind)
-    shift = rng.integers(1, 5, height)[:, None]
-    columns = np.clip(np.arange(width)[None, :] + shift, 0, width - 1)
-    right = np.take_along_axis(left, columns, axis=1)
-    noise = rng.random((height, width)) < 0.1
-    right = np.where(noise, rng.integers(0, 256, (height, width)), right)
-    return left.astype(np.uint8), right.astype(np.uint8)
-
+from scenes import stereo_pair
 
 def divisors(n):
     return [r for r in range(1, n + 1) if n % r == 0]
@@ -84,7 +52,7 @@ def transform_mismatches(image, name, block):
 @pytest.mark.parametrize("block,kind", [(3, "random"), (5, "levels"), (7, "saturated"),
                                         (9, "flat"), (11, "random")])
 def test_transform_matches_reference(name, block, kind):
-    image, _ = make_pair(kind, 13, 17, seed=block)
+    image, _ = stereo_pair(kind, 13, 17, seed=block)
     assert transform_mismatches(image, name, block) == []
 
 
@@ -100,7 +68,7 @@ def test_transform_of_image_smaller_than_window():
 def stage_mismatches(name, block, aggregation, kind):
     """(stage, d) of every disparity whose golden costs or aggregated costs differ."""
     height, width, disparities = 9, 21, 6
-    left, right = make_pair(kind, height, width, seed=block + aggregation)
+    left, right = stereo_pair(kind, height, width, seed=block + aggregation)
     params = StereoParams(transform=name, block=block, disparities=disparities,
                           aggregation=aggregation)
     volume = reference.cost_volume(left, right, name, block, disparities)
@@ -158,7 +126,7 @@ def golden_map(left, right, name, block, disparities, rounds, aggregation, thres
 @pytest.mark.parametrize("name,block,disparities,aggregations,kind,height,width", MAP_CASES)
 def test_disparity_map_matches_reference(name, block, disparities, aggregations, kind,
                                          height, width):
-    left, right = make_pair(kind, height, width, seed=block * disparities)
+    left, right = stereo_pair(kind, height, width, seed=block * disparities)
     volume = reference.cost_volume(left, right, name, block, disparities)
     for aggregation in aggregations:
         aggregated = reference.aggregate(volume, aggregation)
@@ -179,7 +147,7 @@ def test_disparity_map_of_wide_aggregation_and_band_seams(monkeypatch):
     """A = 7, bands of 4 rows, cost chunks of 1 row, 1 or 3 threads: nothing may change."""
     monkeypatch.setattr(golden_pipeline, "_band_rows", lambda *args: 4)
     monkeypatch.setattr(golden_pipeline, "_CHUNK_BYTES", 1)
-    left, right = make_pair("levels", 11, 24, seed=7)
+    left, right = stereo_pair("levels", 11, 24, seed=7)
     for name in ("census", "ext-census"):
         expected = reference.disparity_map(left, right, name, 5, 6, aggregation=7)
         params = StereoParams(transform=name, block=5, disparities=6, rounds=3, aggregation=7)
@@ -189,7 +157,7 @@ def test_disparity_map_of_wide_aggregation_and_band_seams(monkeypatch):
 
 
 def test_disparity_map_of_one_block_9_ext_census():
-    left, right = make_pair("random", 10, 24, seed=9)
+    left, right = stereo_pair("random", 10, 24, seed=9)
     expected = reference.disparity_map(left, right, "ext-census", 9, 8, lr_threshold=1)
     np.testing.assert_array_equal(golden_map(left, right, "ext-census", 9, 8, 2, 3, 1),
                                   expected)
@@ -203,7 +171,7 @@ BROKEN_CASE = ("census", 5, 8, 3, "levels", 12, 30)
 def broken_case_differs():
     """Whether the golden map of BROKEN_CASE differs from the reference (with R = 1, 2)."""
     name, block, disparities, aggregation, kind, height, width = BROKEN_CASE
-    left, right = make_pair(kind, height, width, seed=3)
+    left, right = stereo_pair(kind, height, width, seed=3)
     expected = reference.disparity_map(left, right, name, block, disparities, aggregation, 3)
     return any(not np.array_equal(
         golden_map(left, right, name, block, disparities, rounds, aggregation, 3), expected)
@@ -218,7 +186,7 @@ def test_broken_model_baseline_matches():
 def test_broken_comparison_is_caught(monkeypatch):
     monkeypatch.setattr(golden_transform, "_xi", lambda centre, neighbour: centre >= neighbour)
     assert broken_case_differs()
-    image, _ = make_pair("levels", 8, 9, seed=1)
+    image, _ = stereo_pair("levels", 8, 9, seed=1)
     assert transform_mismatches(image, "rank", 3)
 
 
@@ -233,7 +201,7 @@ def test_broken_padding_is_caught(monkeypatch):
     monkeypatch.setattr(golden_transform, "_padded",
                         lambda image, r: np.pad(image, r, mode="edge"))
     assert broken_case_differs()
-    image, _ = make_pair("flat", 8, 9, seed=1)
+    image, _ = stereo_pair("flat", 8, 9, seed=1)
     assert transform_mismatches(image, "ext-census", 3)
 
 

@@ -1,73 +1,39 @@
 """The whole core in Amaranth's simulator against the golden model, every output pixel.
 
 Frames are small (the Python simulator runs a few thousand clocks per second); the matrix
-covers all four transforms, block sizes 3/5/7, D in {8, 16}, R in {1, 2, 4}, the L/R check
-on and off, aggregation 1/3/5, with random source gaps and sink backpressure of 35 % each.
-Scenario tests cover back-to-back frames, a reset in mid-frame, mis-framed input and the
-throughput; ``test_broken_*`` prove that the comparison catches a wrong tie rule.
+covers all four transforms, block sizes 3/5/7, D in {8, 12, 16}, R in {1, 2, 3, 4}, the
+L/R check on and off, aggregation 1/3/5, with random source gaps and sink backpressure of
+35 % each. Scenario tests cover back-to-back frames, a reset in mid-frame, mis-framed
+input and the throughput; ``test_broken_*`` monkeypatch a deliberately wrong rule into one
+stage and prove that the golden comparison catches it.
 """
 
-import numpy as np
 import pytest
 
-from npstereo.golden.params import StereoParams
-from npstereo.golden.pipeline import disparity_map
-from npstereo.hdl import trees
+from npstereo.hdl import evaluation_stage, input_stage, lr_check, trees
+from npstereo.hdl import core as core_module
 from npstereo.hdl.core import NpStereoCore
+from npstereo.params import ParameterError, StereoParams
 
-from hdl_helpers import RESET, decode_frames, first_mismatch, frame_beats, run_scenario
+from hdl_helpers import RESET, check_frames, frame_beats
+from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
 
 
-def random_pair(rng, width, height):
-    return (rng.integers(0, 256, (height, width), dtype=np.uint8),
-            rng.integers(0, 256, (height, width), dtype=np.uint8))
-
-
-def scene_pair(rng, width, height, disparities):
-    """A textured plane, a nearer textured rectangle and a flat band (ties galore).
-
-    The right view is the left one shifted by each layer's disparity; the flat band makes
-    many disparities cost the same, which is where the tie rule shows.
-    """
-    texture = rng.integers(0, 256, (height, width + disparities), dtype=np.uint8)
-    near = rng.integers(0, 256, (height, width + disparities), dtype=np.uint8)
-    far_d, near_d = disparities // 4, disparities - 2
-    right = texture[:, :width].copy()
-    left = texture[:, far_d:far_d + width].copy()
-    y0, y1, x0, x1 = height // 4, 3 * height // 4, width // 2, width - 2
-    left[y0:y1, x0:x1] = near[y0:y1, x0:x1]
-    right[y0:y1, x0 - near_d:x1 - near_d] = near[y0:y1, x0:x1]
-    left[-4:, :], right[-4:, :] = 90, 90
-    return left, right
-
-
-def check_frames(params, pairs, beats, **kwargs):
-    """Run ``beats``; compare the last len(pairs) output frames with the golden maps."""
-    result = run_scenario(params, beats, **kwargs)
-    frames = decode_frames(result["words"], params)
-    assert len(frames) >= len(pairs), f"only {len(frames)} output frames"
-    for n, ((left, right), got) in enumerate(zip(pairs, frames[-len(pairs):])):
-        expected = disparity_map(left, right, params).disparity
-        mismatch = first_mismatch(expected, got)
-        assert mismatch is None, f"frame {n} of {params.describe()}: {mismatch}"
-    return result
-
-
 MATRIX = [
-    # transform, block, D, R, A, lr, image
-    ("census", 3, 8, 1, 3, 1, "random"),
-    ("census", 5, 16, 4, 3, 2, "scene"),
-    ("census", 7, 8, 2, 3, None, "scene"),
-    ("rank", 3, 8, 2, 3, None, "random"),
-    ("rank", 5, 8, 1, 3, 0, "scene"),
-    ("rank", 7, 16, 2, 3, 1, "random"),
-    ("ext-rank", 3, 8, 4, 3, 1, "scene"),
-    ("ext-rank", 5, 16, 1, 5, None, "random"),
-    ("ext-census", 3, 16, 2, 1, 1, "random"),
-    ("ext-census", 5, 8, 4, 3, None, "scene"),
-    ("census", 3, 12, 3, 3, 1, "scene"),  # D not a power of two
+    # transform, block, D, R, A, lr, image kind (tests/scenes.py)
+    ("census", 3, 8, 1, 3, 1, "independent"),
+    ("census", 5, 16, 4, 3, 2, "layers"),
+    ("census", 7, 8, 2, 3, None, "layers"),
+    ("rank", 3, 8, 2, 3, None, "independent"),
+    ("rank", 5, 8, 1, 3, 0, "layers"),
+    ("rank", 7, 16, 2, 3, 1, "independent"),
+    ("ext-rank", 3, 8, 4, 3, 1, "layers"),
+    ("ext-rank", 5, 16, 1, 5, None, "independent"),
+    ("ext-census", 3, 16, 2, 1, 1, "independent"),
+    ("ext-census", 5, 8, 4, 3, None, "layers"),
+    ("census", 3, 12, 3, 3, 1, "layers"),  # D not a power of two
 ]
 
 
@@ -77,9 +43,7 @@ def test_matches_golden(transform, block, disparities, rounds, aggregation, lr, 
     params = StereoParams(transform=transform, block=block, disparities=disparities,
                           rounds=rounds, aggregation=aggregation, lr_threshold=lr,
                           width=width, height=height)
-    rng = np.random.default_rng(block * 100 + disparities + rounds)
-    pair = (random_pair(rng, width, height) if image == "random"
-            else scene_pair(rng, width, height, disparities))
+    pair = stereo_pair(image, height, width, block * 100 + disparities + rounds, disparities)
     check_frames(params, [pair], frame_beats(*pair), valid_prob=GAPS, ready_prob=GAPS,
                  seed=rounds)
 
@@ -87,8 +51,7 @@ def test_matches_golden(transform, block, disparities, rounds, aggregation, lr, 
 def test_two_frames_back_to_back():
     params = StereoParams(transform="census", block=5, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7)
-    rng = np.random.default_rng(7)
-    pairs = [scene_pair(rng, 20, 7, 8), random_pair(rng, 20, 7)]
+    pairs = [stereo_pair("layers", 7, 20, 7), stereo_pair("independent", 7, 20, 8)]
     result = check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                           valid_prob=GAPS, ready_prob=GAPS, seed=3)
     assert result["errors"] == 0
@@ -97,8 +60,7 @@ def test_two_frames_back_to_back():
 def test_reset_mid_frame_then_clean_frame():
     params = StereoParams(transform="rank", block=3, disparities=8, rounds=2,
                           lr_threshold=1, width=18, height=6)
-    rng = np.random.default_rng(11)
-    first, second = random_pair(rng, 18, 6), scene_pair(rng, 18, 6, 8)
+    first, second = stereo_pair("independent", 6, 18, 11), stereo_pair("layers", 6, 18, 12)
     beats = frame_beats(*first)[:50] + [RESET] + frame_beats(*second)
     check_frames(params, [second], beats, valid_prob=GAPS, ready_prob=GAPS, seed=5)
 
@@ -109,8 +71,8 @@ def test_misframed_input_then_clean_frame(fault):
     width, height = 18, 6
     params = StereoParams(transform="census", block=3, disparities=8, rounds=1,
                           lr_threshold=1, width=width, height=height)
-    rng = np.random.default_rng(13)
-    bad, good = random_pair(rng, width, height), scene_pair(rng, width, height, 8)
+    bad, good = stereo_pair("independent", height, width, 13), stereo_pair("layers", height,
+                                                                            width, 14)
     if fault == "long line":
         broken = frame_beats(*bad, drop_last_at=2)
     elif fault == "short line":
@@ -129,7 +91,7 @@ def test_misframed_input_then_clean_frame(fault):
 def test_no_error_on_clean_input():
     params = StereoParams(transform="census", block=3, disparities=8, rounds=1,
                           width=12, height=4)
-    pair = random_pair(np.random.default_rng(1), 12, 4)
+    pair = stereo_pair("independent", 4, 12, 1)
     result = check_frames(params, [pair, pair], frame_beats(*pair) * 2)
     assert result["errors"] == 0
 
@@ -140,7 +102,7 @@ def test_throughput(rounds):
     width, height = 32, 16
     params = StereoParams(transform="census", block=3, disparities=8, rounds=rounds,
                           lr_threshold=1, width=width, height=height)
-    pair = random_pair(np.random.default_rng(2), width, height)
+    pair = stereo_pair("independent", height, width, 2)
     result = check_frames(params, [pair, pair], frame_beats(*pair) * 2)
     period = result["frame_starts"][-1] - result["frame_starts"][-2]
     bound = 1.01 * width * height * rounds + result["latency"] * rounds
@@ -150,40 +112,89 @@ def test_throughput(rounds):
     assert period <= bound
 
 
-def test_broken_tie_rule_is_caught(monkeypatch):
-    """Ties to the highest disparity in the partition WTA must be detected."""
-    monkeypatch.setattr(trees, "_takes_upper", lambda lower, upper: upper <= lower)
-    params = StereoParams(transform="census", block=3, disparities=8, rounds=2,
-                          lr_threshold=None, width=20, height=8)
-    pair = scene_pair(np.random.default_rng(3), 20, 8, 8)
-    with pytest.raises(AssertionError, match="pixels differ"):
-        check_frames(params, [pair], frame_beats(*pair))
-
-
-def test_broken_evaluation_comparison_is_caught(monkeypatch):
-    """``<=`` instead of ``<`` across partitions (later partition wins ties) is detected."""
-    from npstereo.hdl import evaluation_stage
-    monkeypatch.setattr(evaluation_stage, "_better", lambda candidate, best: candidate <= best)
-    params = StereoParams(transform="census", block=3, disparities=8, rounds=4,
-                          lr_threshold=None, width=20, height=8)
-    pair = scene_pair(np.random.default_rng(3), 20, 8, 8)
-    with pytest.raises(AssertionError, match="pixels differ"):
-        check_frames(params, [pair], frame_beats(*pair))
-
-
 def test_missing_size_is_a_parameter_error():
-    from npstereo.golden.params import ParameterError
     with pytest.raises(ParameterError, match="width and height"):
         NpStereoCore(StereoParams(transform="census", block=3, disparities=8))
 
 
+# Deliberately broken variants must fail the golden comparison ---------------------------
+
+#: A scene with large tie areas (the flat band), where every tie rule shows.
+TIES = stereo_pair("layers", 8, 20, 3)
+#: Unrelated images: many inconsistent pixels, some at |dL - dR| = T exactly, and texture
+#: up to the frame's edges for the border masks.
+NOISE = stereo_pair("independent", 8, 20, 4)
+#: Three rows of a frame, then a reset: the line buffers keep those rows (a finished frame
+#: would have flushed zeros through them), which only the masks keep out of the next one.
+ABORTED = frame_beats(*TIES)[:60] + [RESET]
+
+
+def assert_caught(params, pair=TIES, before=(), **traffic):
+    """The comparison with the golden model reports differing pixels in ``pair``'s frame
+    (sent after the beats ``before``)."""
+    beats = list(before) + frame_beats(*pair)
+    with pytest.raises(AssertionError, match="pixels differ"):
+        check_frames(params, [pair], beats, **traffic)
+
+
+def test_broken_variant_baseline_matches():
+    """The unbroken core passes the cases the broken variants below must fail."""
+    for rounds, lr, pair, before in ((2, None, TIES, ()), (4, None, TIES, ()),
+                                     (2, 0, TIES, ()), (1, 2, NOISE, ()),
+                                     (1, None, NOISE, ABORTED)):
+        check_frames(StereoParams(transform="census", block=3, disparities=8, rounds=rounds,
+                                  lr_threshold=lr, width=20, height=8),
+                     [pair], list(before) + frame_beats(*pair))
+
+
+def test_broken_tie_rule_is_caught(monkeypatch):
+    """Ties to the highest disparity in the partition WTA must be detected."""
+    monkeypatch.setattr(trees, "better", lambda candidate, best: candidate <= best)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=2,
+                               lr_threshold=None, width=20, height=8))
+
+
+def test_broken_evaluation_comparison_is_caught(monkeypatch):
+    """``<=`` instead of ``<`` across partitions (later partition wins ties) is detected."""
+    monkeypatch.setattr(evaluation_stage, "better", lambda candidate, best: candidate <= best)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=4,
+                               lr_threshold=None, width=20, height=8))
+
+
+def test_broken_lr_tie_rule_is_caught(monkeypatch):
+    """The right-referenced WTA of the L/R check keeping ties at the highest disparity."""
+    monkeypatch.setattr(lr_check, "better", lambda candidate, best: candidate <= best)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=2,
+                               lr_threshold=0, width=20, height=8))
+
+
+def test_broken_lr_threshold_is_caught(monkeypatch):
+    """|dL - dR| < T instead of <= T in the consistency test."""
+    monkeypatch.setattr(lr_check, "_consistent",
+                        lambda difference, threshold: difference < threshold)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
+                               lr_threshold=2, width=20, height=8), NOISE)
+
+
+def test_broken_window_row_mask_is_caught(monkeypatch):
+    """Window rows outside the frame left unmasked: the rows an aborted frame left in the
+    line buffers leak into the top rows."""
+    monkeypatch.setattr(input_stage, "_row_inside", lambda y, offset, height: 1)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
+                               lr_threshold=None, width=20, height=8), NOISE, ABORTED)
+
+
+def test_broken_window_column_mask_is_caught(monkeypatch):
+    """Window columns outside the frame left unmasked: the previous row's end leaks in."""
+    monkeypatch.setattr(input_stage, "column_inside", lambda x, offset, width: 1)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
+                               lr_threshold=None, width=20, height=8), NOISE, ABORTED)
+
+
 def test_broken_enable_prediction_is_caught(monkeypatch):
     """An enable that runs ahead of the input (ignores whether a pixel is there) must fail."""
-    from npstereo.hdl import core as core_module
     monkeypatch.setattr(core_module, "_enable",
                         lambda state, last_round, head_valid, head_is_start, out_room: out_room)
-    params = StereoParams(transform="census", block=3, disparities=8, rounds=2,
-                          lr_threshold=None, width=20, height=8)
-    pair = scene_pair(np.random.default_rng(3), 20, 8, 8)
-    with pytest.raises(AssertionError):
-        check_frames(params, [pair], frame_beats(*pair), valid_prob=GAPS, ready_prob=GAPS)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=2,
+                               lr_threshold=None, width=20, height=8),
+                  valid_prob=GAPS, ready_prob=GAPS)

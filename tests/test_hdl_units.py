@@ -1,4 +1,4 @@
-"""The HDL datapath units against the golden model, in the Amaranth simulator.
+"""The HDL datapath units and the aggregation against the golden model, in Amaranth's simulator.
 
 Every unit gets a stream of random inputs with ``en`` toggling randomly (garbage on the
 inputs while ``en`` is low, which the pipeline must ignore) and every output is compared,
@@ -14,15 +14,19 @@ import pytest
 from amaranth.hdl import Fragment
 from amaranth.sim import Simulator
 
+from npstereo.golden import aggregation as golden_aggregation
 from npstereo.golden import matching_cost as golden_cost
 from npstereo.golden import transform as golden_transform
-from npstereo.golden.params import TRANSFORMS, StereoParams
+from npstereo.hdl import aggregation as hdl_aggregation
 from npstereo.hdl import matching_cost as hdl_cost
+from npstereo.hdl import plan
 from npstereo.hdl import transform as hdl_transform
 from npstereo.hdl import trees
+from npstereo.hdl.aggregation import Aggregation
 from npstereo.hdl.matching_cost import MatchingCost
 from npstereo.hdl.transform import Transform
 from npstereo.hdl.trees import AdderTree, MinTree, PopCount
+from npstereo.params import TRANSFORMS, StereoParams
 
 
 def run_stream(dut, inputs, apply, read, expected, seed, en_probability=0.6, garbage=None):
@@ -346,7 +350,7 @@ def test_broken_absolute_difference_is_caught(monkeypatch):
 
 
 def test_broken_min_tie_rule_is_caught(monkeypatch):
-    monkeypatch.setattr(trees, "_takes_upper", lambda lower, upper: upper <= lower)
+    monkeypatch.setattr(trees, "better", lambda candidate, best: candidate <= best)
     with pytest.raises(AssertionError, match="outputs differ"):
         check_min_tree(8, 4, 2, seed=4)
 
@@ -383,3 +387,109 @@ def test_ignoring_enable_is_caught(monkeypatch):
     monkeypatch.setattr(trees, "_register", free_running)
     with pytest.raises(AssertionError, match="outputs differ"):
         check_transform(StereoParams(transform="rank", block=5), 2, seed=8)
+
+
+# Aggregation -----------------------------------------------------------------------------
+
+def check_aggregation(params, seed, en_probability=0.6):
+    """Stream two frames of random costs through ``Aggregation``; compare the second's sums.
+
+    The first frame stops without the zero rows a finished frame ends with (as after a
+    reset in mid-frame), so its rows are still in the cost line buffer when the second
+    starts: only the border masks keep them out. Every output must carry the position
+    and round that ``latency`` (the plan's) says, a rows and a columns behind the input.
+    """
+    rng = np.random.default_rng(seed)
+    width, height, a = params.width, params.height, params.agg_radius
+    rounds, per_round = params.rounds, params.per_round
+    frames = [rng.integers(0, params.max_cost + 1, (params.disparities, height, width))
+              for _ in range(2)]
+    frames[1][:, ::3, ::2] = params.max_cost          # the widest sums
+    expected = np.stack([golden_aggregation.aggregate(frames[1][d], params.aggregation)
+                         for d in range(params.disparities)])
+    # (frame, x, y) of every position: the first frame's rows only, the second's with the
+    # a rows and a columns of zero costs after it that push its last sums out.
+    positions = ([(0, x, y) for y in range(height) for x in range(width)]
+                 + [(1, x, y) for y in range(height + a) for x in range(width)]
+                 + [(1, x, height + a) for x in range(a)])
+    dut = Aggregation(params)
+    latency = dut.latency
+    assert latency == plan.aggregation_latency(params) > 0
+    outcome = {"checked": set(), "mismatches": []}
+
+    def costs_of(frame, x, y, round_):
+        if y >= height:
+            return [0] * per_round
+        return [int(c) for c in frames[frame][round_ * per_round:(round_ + 1) * per_round,
+                                              y, x]]
+
+    def check(ctx, index):
+        position, round_ = divmod(index, rounds)
+        centre = position - a                    # a columns (positions) behind
+        if centre < 0:
+            return
+        frame, x, y = positions[centre]
+        y -= a                                    # a rows behind
+        if frame != 1 or y < 0:
+            return
+        got_tag = ctx.get(dut.tag)
+        got = [ctx.get(dut.sums[i]) for i in range(per_round)]
+        want = [int(expected[round_ * per_round + i, y, x]) for i in range(per_round)]
+        if (got_tag.x, got_tag.y, got_tag.round, got != want) != (x, y, round_, False):
+            outcome["mismatches"].append(((x, y, round_), (got_tag.x, got_tag.y,
+                                                           got_tag.round), got, want))
+        outcome["checked"].add((x, y, round_))
+
+    async def testbench(ctx):
+        stream = random.Random(seed)
+        taken, total = 0, len(positions) * rounds
+        while taken < total + latency:
+            en = stream.random() < en_probability
+            if en and taken < total:
+                frame, x, y = positions[taken // rounds]
+                round_ = taken % rounds
+                values = costs_of(frame, x, y, round_)
+            else:  # garbage while en is low (or after the end): must be ignored
+                x, y, round_ = stream.randrange(width), stream.randrange(height), 0
+                values = [stream.randrange(params.max_cost + 1) for _ in range(per_round)]
+            ctx.set(dut.tag_in, {"x": x, "y": y, "round": round_, "live": 1})
+            for i, value in enumerate(values):
+                ctx.set(dut.costs[i], value)
+            ctx.set(dut.en, en)
+            await ctx.tick()
+            taken += en
+            if en and latency <= taken < total + latency:
+                check(ctx, taken - latency)
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()
+    assert len(outcome["checked"]) == width * height * rounds, "not every sum was compared"
+    mismatches = outcome["mismatches"]
+    assert not mismatches, (f"{len(mismatches)} sums differ, first (position, tag, got, "
+                            f"expected): {mismatches[0]}")
+
+
+@pytest.mark.parametrize("transform,aggregation,disparities,rounds", [
+    ("census", 3, 6, 1), ("rank", 3, 6, 3), ("ext-census", 5, 6, 2), ("ext-rank", 5, 4, 4)])
+def test_aggregation_matches_golden(transform, aggregation, disparities, rounds):
+    params = StereoParams(transform=transform, block=3, disparities=disparities,
+                          rounds=rounds, aggregation=aggregation, width=9, height=6)
+    check_aggregation(params, seed=aggregation * 10 + rounds)
+
+
+def test_broken_aggregation_row_mask_is_caught(monkeypatch):
+    """Rows above the frame not masked: the previous frame's rows leak into the sums."""
+    monkeypatch.setattr(hdl_aggregation, "_row_inside", lambda y, above: 1)
+    with pytest.raises(AssertionError, match="sums differ"):
+        check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
+                                       width=9, height=6), seed=1)
+
+
+def test_broken_aggregation_column_mask_is_caught(monkeypatch):
+    """Columns beyond the frame's edges not masked: the sums wrap around to the next row."""
+    monkeypatch.setattr(hdl_aggregation, "column_inside", lambda x, offset, width: 1)
+    with pytest.raises(AssertionError, match="sums differ"):
+        check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
+                                       width=9, height=6), seed=1)

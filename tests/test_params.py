@@ -2,7 +2,7 @@
 
 import pytest
 
-from npstereo.golden.params import ParameterError, StereoParams, UserError
+from npstereo.params import ParameterError, StereoParams, UserError
 
 BAD = [
     ({"block": 8}, "block"),              # even
@@ -38,7 +38,7 @@ def test_bad_parameters_are_rejected(changes, word):
 
 def test_the_rejection_check_fails_on_a_valid_configuration():
     # The helper above must not pass vacuously: a valid configuration makes it fail.
-    with pytest.raises(pytest.fail.Exception):
+    with pytest.raises(pytest.fail.Exception, match="DID NOT RAISE"):
         assert_rejected({"block": 9}, "block")
 
 
@@ -48,7 +48,16 @@ def test_the_rejection_check_fails_on_a_valid_configuration():
     {"disparities": 16, "width": 17, "height": 1}])
 def test_boundary_values_are_accepted(changes):
     params = StereoParams(**changes)
-    assert params.replace() == params
+    assert {name: getattr(params, name) for name in changes} == changes
+
+
+def test_replace_validates():
+    params = StereoParams(disparities=10, rounds=5)
+    assert params.replace(rounds=2).rounds == 2 and params.rounds == 5
+    with pytest.raises(ParameterError, match="rounds must divide"):
+        params.replace(rounds=3)
+    with pytest.raises(ParameterError, match="image width"):
+        params.with_size(10, 4)
 
 
 def test_first_valid_column_and_widths():

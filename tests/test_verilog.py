@@ -1,19 +1,21 @@
 """``npstereo verilog``: generated text, lint, and the command line's error handling.
 
 ``make test`` lints five configurations covering every transform, R = 1 and R = D, and a
-disparity range that is not a power of two; the full sweep of 24 configurations (block sizes 3..19, D in
-{16, 64, 100}, R in {1, 2, 4, 10}) runs in ``tests/bench_hdl.py``, which prints one line
-per configuration (generation time, lint result).
+disparity range that is not a power of two; the full sweep of 25 configurations (block
+sizes 3..19, D in {16, 64, 100}, R in {1, 2, 4, 10}) runs in ``tests/bench_hdl.py``, which
+prints one line per configuration (generation time, lint result).
 """
 
 import subprocess
 import sys
+import time
 
 import pytest
 
 from npstereo.gen import cli
-from npstereo.gen.verilog import TOP_NAME, core_verilog, lint
-from npstereo.golden.params import ParameterError, StereoParams
+from npstereo.hdl.verilog import TOP_NAME, core_verilog
+from npstereo.params import ParameterError, StereoParams
+from npstereo.sim.lint import lint
 
 QUICK = [
     StereoParams(transform="census", block=3, disparities=16, rounds=1, width=24, height=8),
@@ -77,6 +79,11 @@ def test_command_writes_file(tmp_path, capsys):
     (["--aggregation", "2"], "aggregation"),
     (["--lr-threshold", "-1"], "lr threshold"),
     (["--transform", "sad"], "invalid choice"),
+    # Beyond what the hardware is generated for: refused at once, not elaborated.
+    (["--width", "100000"], "image width must be <= 8192 for the hardware, not 100000"),
+    (["--block", "99"], "block size must be <= 31 for the hardware, not 99"),
+    (["--disparities", "1000", "--width", "1200"],
+     "disparities must be <= 256 for the hardware, not 1000"),
 ])
 def test_bad_parameters_exit_2_one_line(args, message, tmp_path):
     out = tmp_path / "core.v"
@@ -87,7 +94,10 @@ def test_bad_parameters_exit_2_one_line(args, message, tmp_path):
     argv = [sys.executable, "-m", "npstereo.gen.cli", "verilog", "--out", str(out)]
     for key, value in base.items():
         argv += [key, value]
-    result = subprocess.run(argv, capture_output=True, text=True)
+    started = time.perf_counter()
+    result = subprocess.run(argv, capture_output=True, text=True, timeout=120)
+    # A whole process (interpreter, numpy, Amaranth) but no elaboration: seconds at most.
+    assert time.perf_counter() - started < 30
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and message in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
@@ -100,6 +110,14 @@ def test_missing_size_is_rejected(tmp_path):
     assert result.returncode == 2 and "--width" in result.stderr
     with pytest.raises(ParameterError, match="--width and --height"):
         core_verilog(StereoParams(transform="census", block=3, disparities=8))
+
+
+def test_limits_are_named_in_the_help(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["verilog", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "at most 8192" in text and "at most 31" in text and "at most 256" in text
+
 
 
 def test_out_is_a_directory(tmp_path, capsys):

@@ -24,7 +24,7 @@ from PIL import Image
 from npstereo.gen.cmd_paper import PAPER_FIG6, BLOCKS
 from npstereo.golden.data import load_middlebury, to_gray
 from npstereo.golden.degrade import gaussian_noise_pair
-from npstereo.golden.params import TRANSFORMS, StereoParams
+from npstereo.params import TRANSFORMS, StereoParams
 from npstereo.golden.pipeline import disparity_map
 
 D = 100

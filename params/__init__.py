@@ -1,8 +1,13 @@
-"""The one parameter object that flows through golden/, hdl/, gen/ and sim/.
+"""The parameter object and the user-facing errors that golden/, hdl/, gen/ and sim/ share.
 
-Every entry point builds a :class:`StereoParams` first; its constructor is the only place
-where parameters are validated, so the golden model, the hardware generator and the
-co-simulation reject exactly the same configurations with exactly the same message.
+A neutral module (it imports nothing of the project), so that the golden model, the
+hardware, the command line and the co-simulation can all depend on it without depending
+on each other. Every entry point builds a :class:`StereoParams` first; its constructor
+checks what every part needs (the algorithm's parameters and the frame size), so the
+golden model, the hardware generator and the co-simulation reject those configurations
+with the same message. What only one part needs is checked there: the hardware's size
+limits in :func:`npstereo.hdl.plan.check_buildable`, image contents in the golden model's
+loaders and pipeline, file names in the commands.
 """
 
 from dataclasses import dataclass, replace
@@ -30,6 +35,7 @@ class ParameterError(UserError, ValueError):
 
 
 def _is_int(value):
+    """A true integer: ``bool`` is an ``int`` subclass, but ``block=True`` is a mistake."""
     return isinstance(value, int) and not isinstance(value, bool)
 
 

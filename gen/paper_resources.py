@@ -1,0 +1,40 @@
+"""The paper's resource figures (Ambrosch et al. 2008, Figs. 13 and 14) and its sweep.
+
+Stratix II EP2S180 logic elements and memory bits of the four transforms at block sizes
+7 .. 19 (450 x 375, D = 100, R = 10), the clock the paper states, and the configurations
+``npstereo report --paper`` runs to put ours beside them.
+"""
+
+from ..params import TRANSFORMS, StereoParams
+
+__all__ = ["PAPER_BLOCKS", "PAPER_LOGIC", "PAPER_DID_NOT_FIT", "PAPER_MEMORY", "PAPER_CLOCK",
+           "PAPER_SIZE", "PAPER_DISPARITIES", "PAPER_ROUNDS", "paper_configurations"]
+
+#: Block sizes of the paper's figures 13 and 14.
+PAPER_BLOCKS = (7, 9, 11, 13, 15, 17, 19)
+#: Stratix II logic elements (Fig. 13); None where the design did not fit and no figure exists.
+PAPER_LOGIC = {
+    "rank": (10174, 13514, 17475, 21999, 23554, 28686, 34053),
+    "ext-rank": (17624, 24673, 33179, 43406, 52356, 64524, 79015),
+    "census": (17713, 26788, 38006, 51370, 62998, 79664, 97824),
+    "ext-census": (80598, 131616, 148213, 205448, 272068, 348133, None),
+}
+#: Blocks where the paper's ext. census did not fit the EP2S180 (figure value still given).
+PAPER_DID_NOT_FIT = {("ext-census", b) for b in (11, 13, 15, 17, 19)}
+_RANK_MEMORY = (557056, 589824, 622592, 655360, 688128, 720896, 753664)
+_CENSUS_MEMORY = (688128, 720896, 753664, 786432, 819200, 851968, 884736)
+#: Memory bits (Fig. 14).
+PAPER_MEMORY = {"rank": _RANK_MEMORY, "ext-rank": _RANK_MEMORY,
+                "census": _CENSUS_MEMORY, "ext-census": _CENSUS_MEMORY}
+#: The paper's clock in MHz, given only at the ends of the sweep.
+PAPER_CLOCK = {7: 100.0, 19: 50.0}
+PAPER_SIZE = (450, 375)
+PAPER_DISPARITIES, PAPER_ROUNDS = 100, 10
+
+
+def paper_configurations():
+    """The paper's sweep, smallest first so a partial run covers the most configurations."""
+    width, height = PAPER_SIZE
+    return [StereoParams(transform=t, block=b, disparities=PAPER_DISPARITIES,
+                         rounds=PAPER_ROUNDS, width=width, height=height)
+            for b in PAPER_BLOCKS for t in TRANSFORMS]
