@@ -25,7 +25,8 @@ from PIL import Image, UnidentifiedImageError
 
 from ..params import UserError
 
-__all__ = ["StereoPair", "to_gray", "read_image", "read_pfm", "load_middlebury", "LAYOUTS"]
+__all__ = ["StereoPair", "to_gray", "check_same_size", "read_image", "read_pfm",
+           "load_middlebury", "LAYOUTS"]
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,14 @@ def _open(path, what):
     except (UnidentifiedImageError, OSError, ValueError) as error:
         raise UserError(f"{what} {path} is not a readable image ({error.__class__.__name__})")
     return image
+
+
+def check_same_size(left, right, where=""):
+    """Raise a one-line :class:`UserError` unless both images have the same height and
+    width; ``where`` (e.g. " in folder") completes the message."""
+    if left.shape[:2] != right.shape[:2]:
+        raise UserError(f"left and right images{where} differ in size: {left.shape[1]}x"
+                        f"{left.shape[0]} and {right.shape[1]}x{right.shape[0]}")
 
 
 def read_image(path, what="image"):
@@ -182,10 +191,7 @@ def load_middlebury(folder):
         if (folder / left_name).exists():
             left = read_image(folder / left_name, "left image")
             right = read_image(folder / right_name, "right image")
-            if left.shape[:2] != right.shape[:2]:
-                raise UserError(
-                    f"left and right images in {folder} differ in size: {left.shape[1]}x"
-                    f"{left.shape[0]} and {right.shape[1]}x{right.shape[0]}")
+            check_same_size(left, right, f" in {folder}")
             if left.ndim != right.ndim:
                 raise UserError(f"left and right images in {folder} must both be gray or RGB")
             truth = read_truth(folder / truth_name, left.shape)

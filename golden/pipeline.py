@@ -14,6 +14,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .aggregation import aggregate
+from .data import check_same_size
 from .lr_check import invalidate_border, lr_check
 from .matching_cost import cost_dtype, matching_costs
 from ..params import ParameterError
@@ -110,10 +111,7 @@ def _check_images(left, right):
         if image.ndim != 2 or image.dtype != np.uint8:
             raise ParameterError(
                 f"{name} image must be 8-bit gray (2-D uint8), not {image.dtype} {image.shape}")
-    if left.shape != right.shape:
-        raise ParameterError(
-            f"left and right images must have the same size, not {left.shape[1]}x"
-            f"{left.shape[0]} and {right.shape[1]}x{right.shape[0]}")
+    check_same_size(left, right)
 
 
 def disparity_map(left, right, params, threads=None):
