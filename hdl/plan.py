@@ -63,6 +63,16 @@ def output_width(params):
 
 # Register plans of the datapath units (lists of bool, see trees.register_plan) -----------
 
+def _unit_plan(tree, params, every, depth):
+    """Register plan of a unit over the k neighbours: ``tree`` "popcount" (of k bits),
+    "sum" (of k values) or None (one value); ``depth`` levels of logic in front of it
+    count against the register spacing, and the result is registered (``every`` > 0)."""
+    registered = every > 0
+    if tree == "popcount":
+        return popcount_plan(params.neighbours, every, depth, registered)
+    return register_plan(params.neighbours if tree == "sum" else 1, every, depth, registered)
+
+
 def transform_plan(params, every=DEFAULT_EVERY):
     """Register plan of ``params.transform``; ``sum()`` of it is the transform's latency.
 
@@ -70,12 +80,8 @@ def transform_plan(params, every=DEFAULT_EVERY):
     tree and counts against the register spacing. Census and ext. census have no tree:
     that level, then the output register.
     """
-    registered = every > 0
-    if params.transform == "rank":
-        return popcount_plan(params.neighbours, every, 1, registered)
-    if params.transform == "ext-rank":
-        return register_plan(params.neighbours, every, 1, registered)
-    return register_plan(1, every, 1, registered)
+    tree = {"rank": "popcount", "ext-rank": "sum"}.get(params.transform)
+    return _unit_plan(tree, params, every, 1)
 
 
 def cost_plan(params, every=DEFAULT_EVERY):
@@ -83,14 +89,10 @@ def cost_plan(params, every=DEFAULT_EVERY):
 
     The census cost's XOR in front of the popcount is one LUT level, far shorter than an
     adder level, and is not counted against the spacing; the absolute differences of the
-    other costs are.
+    other costs are. Rank and ext. rank costs are one absolute difference.
     """
-    registered = every > 0
-    if params.transform == "census":
-        return popcount_plan(params.neighbours, every, 0, registered)
-    if params.transform == "ext-census":
-        return register_plan(params.neighbours, every, 1, registered)
-    return register_plan(1, every, 1, registered)
+    tree = {"census": "popcount", "ext-census": "sum"}.get(params.transform)
+    return _unit_plan(tree, params, every, 0 if params.transform == "census" else 1)
 
 
 def min_tree_plan(params, every=DEFAULT_EVERY):
