@@ -19,7 +19,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .tools import VERILATOR_WAIVERS, require, use_project_tools, verilator_bin_dir
+from .tools import VERILATOR_WAIVERS, compiler_cache, require, use_project_tools, \
+    verilator_bin_dir
 
 __all__ = ["CosimError", "Build", "build", "default_build_root"]
 
@@ -98,17 +99,35 @@ def _save_runtime(build_root, flags, sim_dir):
 
 
 @contextlib.contextmanager
-def _makeflags(flags):
-    """``MAKEFLAGS`` extended by ``flags`` for the make that cocotb's runner starts."""
-    saved = os.environ.get("MAKEFLAGS")
-    os.environ["MAKEFLAGS"] = f"{saved or ''} {flags}".strip()
+def _environment(changes):
+    """This process's environment with ``changes`` for the make that cocotb's runner
+    starts; ``MAKEFLAGS`` is extended rather than replaced."""
+    saved = {name: os.environ.get(name) for name in changes}
+    for name, value in changes.items():
+        os.environ[name] = (f"{saved[name] or ''} {value}".strip() if name == "MAKEFLAGS"
+                            else value)
     try:
         yield
     finally:
-        if saved is None:
-            os.environ.pop("MAKEFLAGS", None)
-        else:
-            os.environ["MAKEFLAGS"] = saved
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def _verilator_environment(makeflags):
+    """Make flags and, with ccache installed, the compiler cache for a Verilator build.
+
+    ccache's base directory is the root, so that it hashes the include paths relative to
+    the build folder: every clone with the same layout (build/ and .venv/ in the working
+    tree) shares the cached objects. The cache is not part of the build key: it changes
+    how fast a model is built, not what is built.
+    """
+    cache = compiler_cache()
+    if cache is None:
+        return {"MAKEFLAGS": makeflags}
+    return {"MAKEFLAGS": f"{makeflags} OBJCACHE={cache}", "CCACHE_BASEDIR": "/"}
 
 
 @dataclass
@@ -198,8 +217,8 @@ def build(simulator, sources, top, build_root=None, optimize=True, harness=False
         if simulator == "verilator":
             _seed_runtime(root, args, result.sim_dir)
         try:
-            with (_makeflags(makeflags) if simulator == "verilator"
-                  else contextlib.nullcontext()):
+            with _environment(_verilator_environment(makeflags)
+                              if simulator == "verilator" else {}):
                 runner.build(sources=result.sources, hdl_toplevel=top,
                              build_dir=result.sim_dir, build_args=args,
                              timescale=("1ns", "1ps"), log_file=directory / "build.log")

