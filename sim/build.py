@@ -19,6 +19,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from cocotb_tools.runner import Verilator, get_runner
+
 from .tools import VERILATOR_WAIVERS, compiler_cache, require, use_project_tools, \
     verilator_bin_dir
 
@@ -146,7 +148,6 @@ class Build:
         return self.directory / "sim"
 
     def runner(self):
-        from cocotb_tools.runner import Verilator, get_runner
         if self.simulator != "verilator" or not self.harness:
             return get_runner(self.simulator)
 
