@@ -28,10 +28,15 @@ def test_table_is_matplotlibs():
 
 
 def sample_maps():
+    """Integer maps (the commands' int16, -1 invalid, values beyond the top) and float maps
+    (ground truth, NaN unknown)."""
     rng = np.random.default_rng(0)
-    integers = rng.integers(-1, 100, (30, 40)).astype(np.float64)
-    integers[0, :3] = (np.nan, 99, 150)
-    return [(integers, 99), (integers, 37), (integers, 0), (rng.random((20, 20)) * 80, 79)]
+    integers = rng.integers(-1, 100, (30, 40)).astype(np.int16)
+    integers[0, :2] = (99, 150)
+    floats = integers.astype(np.float64)
+    floats[1, 0] = np.nan
+    return [(m, top) for m in (integers, floats) for top in (99, 37, 0)] + [
+        (rng.random((20, 20)) * 80, 79), (np.full((2, 3), -1, np.int16), 10)]
 
 
 def test_maps_look_as_matplotlib_draws_them():
