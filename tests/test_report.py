@@ -113,12 +113,12 @@ def test_small_core_report_and_cache(tmp_path):
 
 
 #: Shapes of the memory formula beyond test_small_core_report_and_cache's census 3x3, A = 3:
-#: the cost line buffer's A - 1 rows of D costs at another cost width, and none without
-#: aggregation.
+#: the cost line buffer's A - 1 = 4 rows of D costs at another cost width (11 bits), and
+#: none without aggregation next to line buffers of B - 1 = 4 rows.
 MEMORY_SHAPES = [
-    StereoParams(transform="ext-rank", block=5, disparities=6, rounds=3, aggregation=5,
-                 width=24, height=8),
-    StereoParams(transform="rank", block=3, disparities=4, rounds=1, aggregation=1,
+    StereoParams(transform="ext-rank", block=3, disparities=4, rounds=2, aggregation=5,
+                 width=16, height=4),
+    StereoParams(transform="rank", block=5, disparities=4, rounds=1, aggregation=1,
                  lr_threshold=None, width=16, height=4),
 ]
 
