@@ -38,7 +38,7 @@ class Aggregation(wiring.Component):
     Parameters
     ----------
     params : StereoParams
-        Needs ``width`` and ``height``.
+        Its ``width`` sizes the cost line buffer (W * R words) and bounds the columns.
 
     Attributes
     ----------
