@@ -21,7 +21,7 @@ How a path is counted (``docs/synthesis-flow.md``):
 * A carry chain counts one level where the path enters it (the carry cell's LUT), plus a
   fraction per further carry cell passed on the dedicated carry wire: the cell's carry
   delay divided by the delay of one LUT level with its routing. With the delays below, a
-  32-bit ECP5 adder (16 ``CCU2C``) is 1 + 15 x 0.054 = 1.8 levels; a 32-bit Cyclone V
+  32-bit ECP5 adder (16 ``CCU2C``) is 1 + 15 x 0.071 = 2.1 levels; a 32-bit Cyclone V
   adder (32 ``MISTRAL_ALUT_ARITH``) is 1 + 31 x 0.036 = 2.1 levels. Counting each carry
   cell as a level would make a counter look like 16 LUTs deep, which its delay is not.
 """
@@ -31,14 +31,17 @@ from pathlib import Path
 
 __all__ = ["CARRY_WEIGHT", "logic_depth", "logic_depth_file"]
 
-# Delays (ns) behind the carry weights. Carry: Yosys 0.70's cell libraries (specify
-# blocks of CCU2C in share/lattice/ccu2c_sim.vh, CIN->COUT 43 ps per cell of two bits; of
-# MISTRAL_ALUT_ARITH in share/intel_alm/common/alm_sim.v, CI->CO 36 ps per bit). One
-# LUT level: the mean LUT delay of the same libraries (ECP5 LUT4 0.29 ns, Cyclone V ALUT6
-# 0.55 ns) plus one typical general-routing hop (ECP5: 0.5 ns, the median routed net of
-# nextpnr-ecp5 reports on our cores; Cyclone V: 0.45 ns assumed, no open router).
-_LEVEL_NS = {"ecp5": 0.29 + 0.5, "cyclonev": 0.55 + 0.45}
-_CARRY_NS = {"ecp5": 0.043, "cyclonev": 0.036}
+# Delays (ns) behind the carry weights. Carry, per carry cell on the dedicated carry wire:
+# ECP5 CCU2C (two bits) FCI->FCO 0.071 ns in nextpnr-ecp5 0.11's timing model (default
+# speed grade, as its critical-path reports show it); Cyclone V MISTRAL_ALUT_ARITH (one
+# bit) CI->CO 36 ps in Yosys 0.70's share/intel_alm/common/alm_sim.v (there is no open
+# Cyclone V timing model besides it). One LUT level: a LUT plus one short routed
+# connection, 1.0 ns on both: ECP5 LUT4 0.24-0.45 ns in nextpnr's reports plus about
+# 0.6 ns of routing (nextpnr's short connections in our reports: 0.13-1.6 ns); Cyclone V
+# ALUT6 0.4-0.6 ns (alm_sim.v) plus about 0.45 ns. The routing part is an assumption: the
+# real one depends on placement, which is exactly what this figure does without.
+_LEVEL_NS = {"ecp5": 1.0, "cyclonev": 1.0}
+_CARRY_NS = {"ecp5": 0.071, "cyclonev": 0.036}
 
 #: Levels added per carry cell passed on the carry wire, per target.
 CARRY_WEIGHT = {target: round(_CARRY_NS[target] / _LEVEL_NS[target], 3)

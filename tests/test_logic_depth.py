@@ -114,7 +114,7 @@ def test_hand_netlist_lut_chain_and_carry():
     assert depth["levels"] == 2 and depth["luts"] == 2
     assert depth["from"] == "r0 (TRELLIS_FF.Q)" and depth["to"] == "r1 (TRELLIS_FF.DI)"
     assert depth["cells"] == ["l1", "l2"]
-    # a longer chain overtakes the two LUTs: 1 + 30 hops x 0.054 = 2.6 levels
+    # a longer chain overtakes the two LUTs: 1 + 31 hops x 0.071 = 3.2 levels
     previous = 37
     for index in range(4, 32):
         cells[f"c{index}"] = _ccu2c("0", previous, 100 + index, 200 + index)
