@@ -60,6 +60,16 @@ def _param_str(value):
     return str(value).rstrip(" ") if isinstance(value, str) else str(value)
 
 
+def _truthy(value):
+    """An attribute set to a non-zero value (``write_json`` writes ``keep`` as bits)."""
+    if value is None:
+        return False
+    try:
+        return _param_int(value) != 0
+    except ValueError:
+        return bool(str(value).strip())
+
+
 def _bit(cell, port):
     """The single bit connected to ``port`` (None when unconnected)."""
     bits = cell["connections"].get(port)
@@ -106,9 +116,6 @@ def _loads(module):
 def _port_problem(cell, side):
     """Why a DP16KD port's settings rule out the output register, or None."""
     parameters = cell["parameters"]
-    if any(_param_str(parameters.get(p, "NOREG")) != "NOREG"
-           for p in (f"REGMODE_{side}",)):
-        return "port already registered"
     if not _const(_bit(cell, f"RST{side}"), "0") or \
             _param_str(parameters.get(f"RST{side}MUX", f"RST{side}")) != f"RST{side}":
         return "read port has a reset"
@@ -131,7 +138,7 @@ def _register_signature(ff):
 def _register_problem(ff):
     """Why a TRELLIS_FF is not a plain register the output register can replace."""
     parameters = ff["parameters"]
-    if ff.get("attributes", {}).get("keep") not in (None, 0, "0", "00000000000000000000000000000000"):
+    if _truthy(ff.get("attributes", {}).get("keep")):
         return "register marked keep"
     lsr = _bit(ff, "LSR")
     lsrmux = _param_str(parameters.get("LSRMUX", "LSR"))
@@ -195,7 +202,7 @@ def pack_outreg(netlist, top=None):
 
 
 def _examine(cells, loads, cell, side, regmodes, outputs, gsr):
-    """``(reason, {}))`` when a read port cannot be packed, else ``(None, {DO: ff})``."""
+    """``(reason, {})`` when a read port cannot be packed, else ``(None, {DO: ff})``."""
     if gsr:
         return "design uses GSR", {}
     for regmode in regmodes:
@@ -238,8 +245,7 @@ def _top_module(netlist, top):
     modules = netlist["modules"]
     if top is not None:
         return modules[top]
-    tops = [m for m in modules.values()
-            if _param_int(m.get("attributes", {}).get("top", 0) or 0)]
+    tops = [m for m in modules.values() if _truthy(m.get("attributes", {}).get("top"))]
     if len(tops) == 1:
         return tops[0]
     if len(modules) == 1:
