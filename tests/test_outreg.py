@@ -238,3 +238,15 @@ def test_registers_that_differ_are_not_packed(tmp_path, design, reason):
     assert result["outreg_not_packed"].get(reason) == 1, result["outreg_not_packed"]
     mismatches, log = simulate(design, "netlist.json", tmp_path)
     assert mismatches == 0, log
+
+
+def test_packing_raises_fmax_above_150_mhz(tmp_path):
+    """nextpnr-ecp5: block RAM -> register -> adder -> register, with and without packing."""
+    fmax = {}
+    for outreg_on in (False, True):
+        result = synthesise(BRAM18, "ecp5", "top", pnr=True, freq=150, outreg=outreg_on,
+                            keep=tmp_path / str(outreg_on))
+        assert result["status"] == "ok", result
+        fmax[outreg_on] = result["fmax_mhz"]
+    # Unpacked, the DP16KD's 5.83 ns clock-to-output alone limits the clock.
+    assert fmax[False] < 150 <= fmax[True], fmax
