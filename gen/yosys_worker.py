@@ -38,13 +38,12 @@ def abc_executable(ys):
 
 
 def _commands(script_text):
-    """Script lines without comments and blank lines (each is one Yosys command)."""
-    commands = []
-    for line in script_text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if line:
-            commands.append(line)
-    return commands
+    """Script lines without blank and comment lines (each is one Yosys command).
+
+    A ``#`` later in a line is left to Yosys's own command parser, which knows quoting.
+    """
+    return [line.strip() for line in script_text.splitlines()
+            if line.strip() and not line.strip().startswith("#")]
 
 
 def _time_summary(times):
