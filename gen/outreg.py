@@ -149,6 +149,8 @@ def _register_problem(ff):
     cemux = _param_str(parameters.get("CEMUX", "1"))
     if cemux not in ("1", "CE"):
         return "register enable inverted or constant"
+    if cemux == "CE" and _bit(ff, "CE") is None:
+        return "register enable unconnected"   # nothing defined to give OCE
     return None
 
 
