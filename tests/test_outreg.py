@@ -250,3 +250,67 @@ def test_packing_raises_fmax_above_150_mhz(tmp_path):
         fmax[outreg_on] = result["fmax_mhz"]
     # Unpacked, the DP16KD's 5.83 ns clock-to-output alone limits the clock.
     assert fmax[False] < 150 <= fmax[True], fmax
+
+
+def _hand_netlist(**changes):
+    """One DP16KD (18-bit read on B) whose DOB0/DOB1 feed two flip-flops, as JSON.
+
+    ``changes`` edit it: ``ff`` (parameters of both flip-flops), ``ff_attributes``,
+    ``bram`` (DP16KD parameters), ``bram_pins`` (DP16KD connections), ``extra`` (cells).
+    """
+    bram = {"type": "DP16KD", "parameters": {"DATA_WIDTH_A": "00000000000000000000000000010010",
+                                             "DATA_WIDTH_B": "00000000000000000000000000010010",
+                                             "REGMODE_A": "NOREG", "REGMODE_B": "NOREG",
+                                             "CLKBMUX": "CLKB", "CSDECODE_B": "0b000"},
+            "attributes": {}, "port_directions": {"CLKB": "input", "OCEB": "input",
+                                                  "RSTB": "input", "DOB0": "output",
+                                                  "DOB1": "output"},
+            "connections": {"CLKB": [2], "OCEB": ["1"], "RSTB": ["0"], "DOB0": [10],
+                            "DOB1": [11]}}
+    bram["parameters"].update(changes.get("bram", {}))
+    bram["connections"].update(changes.get("bram_pins", {}))
+    cells = {"mem": bram}
+    for index, (d, q) in enumerate(((10, 20), (11, 21))):
+        cells[f"ff{index}"] = {
+            "type": "TRELLIS_FF",
+            "parameters": dict({"CEMUX": "CE", "CLKMUX": "CLK", "LSRMUX": "LSR",
+                                "REGSET": "RESET", "GSR": "DISABLED"}, **changes.get("ff", {})),
+            "attributes": dict(changes.get("ff_attributes", {})),
+            "port_directions": {"CLK": "input", "CE": "input", "LSR": "input", "DI": "input",
+                                "Q": "output"},
+            "connections": {"CLK": [2], "CE": [5], "LSR": ["0"], "DI": [d], "Q": [q]}}
+    cells.update(changes.get("extra", {}))
+    return {"modules": {"top": {"attributes": {"top": "00000000000000000000000000000001"},
+                                "ports": {"q": {"direction": "output", "bits": [20, 21]}},
+                                "cells": cells}}}
+
+
+@pytest.mark.parametrize("changes, reason", [
+    ({}, None),
+    ({"ff": {"CEMUX": "1"}}, None),
+    ({"ff": {"REGSET": "SET"}}, "register initialised to 1"),
+    ({"ff": {"CLKMUX": "INV"}}, "register on another clock"),
+    ({"ff": {"CEMUX": "INV"}}, "register enable inverted or constant"),
+    ({"ff_attributes": {"keep": "00000000000000000000000000000001"}}, "register marked keep"),
+    ({"bram_pins": {"RSTB": [7]}}, "read port has a reset"),
+    ({"bram_pins": {"CLKB": [3]}}, "register on another clock"),
+    ({"bram": {"REGMODE_B": "OUTREG"}}, "port already registered"),
+    ({"extra": {"g": {"type": "GSR", "parameters": {}, "attributes": {},
+                      "port_directions": {"GSR": "input"}, "connections": {"GSR": [9]}}}},
+     "design uses GSR"),
+])
+def test_hand_netlist_conditions(changes, reason):
+    netlist = _hand_netlist(**changes)
+    report = outreg.pack_outreg(netlist)
+    cells = netlist["modules"]["top"]["cells"]
+    if reason is None:
+        assert report["packed"] == 1 and report["registers"] == 2
+        assert "ff0" not in cells and "ff1" not in cells
+        assert cells["mem"]["parameters"]["REGMODE_B"] == "OUTREG"
+        assert cells["mem"]["connections"]["DOB0"] == [20]
+        enable = "1" if changes.get("ff", {}).get("CEMUX") == "1" else 5
+        assert cells["mem"]["connections"]["OCEB"] == [enable]
+    else:
+        assert report["packed"] == 0
+        assert report["not_packed"].get(reason, 0) >= 1, report["not_packed"]
+        assert "ff0" in cells and cells["mem"]["connections"]["DOB0"] == [10]
