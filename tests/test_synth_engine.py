@@ -1,0 +1,127 @@
+"""The Yosys engines of ``npstereo.gen.synth``: native (pyosys) and WebAssembly (yowasp).
+
+Both must produce the same cells for the same design (they are the same Yosys version);
+the native one runs in a worker process whose whole process group a timeout kills.
+"""
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from npstereo.gen import synth
+from npstereo.gen.synth import ENGINES, ToolError, run_yosys, synthesise, tool_versions
+from npstereo.hdl.verilog import core_verilog
+from npstereo.params import StereoParams, UserError
+
+#: Memory, adder and comparison: block RAM, carry chain and LUT mapping in one small design.
+DESIGN = """
+module top(input clk, input we, input [8:0] wa, input [8:0] ra, input [15:0] wd,
+           output reg [15:0] q, output reg big);
+  (* no_rw_check *) reg [15:0] mem [0:511];
+  reg [15:0] rd;
+  always @(posedge clk) begin
+    if (we) mem[wa] <= wd;
+    rd <= mem[ra];
+    q <= rd + wd;
+    big <= rd > q;
+  end
+endmodule
+"""
+
+
+@pytest.mark.parametrize("target", ["cyclonev", "ecp5"])
+def test_engines_give_identical_cells(tmp_path, target):
+    results = {}
+    for engine in ENGINES:
+        keep = tmp_path / engine
+        results[engine] = synthesise(DESIGN, target, "top", engine=engine, keep=keep)
+        assert results[engine]["status"] == "ok", results[engine]
+        assert results[engine]["engine"] == engine
+        assert results[engine]["engine_version"] == synth.engine_version(engine) != "missing"
+    native, wasm = (synth._cell_counts(tmp_path / e / "stat.json") for e in ENGINES)
+    assert native == wasm
+    for key in ("logic", "registers", "block_rams", "memory_bits", "logic_levels"):
+        assert results["native"][key] == results["wasm"][key]
+
+
+def test_native_engine_runs_abc_from_the_wheel(tmp_path):
+    result = synthesise(DESIGN, "cyclonev", "top", engine="native", keep=tmp_path)
+    assert result["status"] == "ok"
+    log = (tmp_path / "yosys.log").read_text()
+    abc = log.split("yosys-abc: ", 1)[1].split("\n", 1)[0]
+    assert Path(abc).name == "yosys-abc" and os.access(abc, os.X_OK)
+    assert "ABC: " in log                      # ABC really ran (abc9 of synth_intel_alm)
+    assert result["yosys_time_split"].startswith(("100%", "9", "8", "7", "6", "5", "4"))
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_yosys_error_is_a_failed_result(engine):
+    result = synthesise("module broken(input a; endmodule\n", "ecp5", "broken", engine=engine)
+    assert result["status"] == "failed"
+    assert "ERROR" in result["message"] and result["engine"] == engine
+
+
+def test_native_timeout(tmp_path):
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=2, width=32,
+                          height=8)
+    started = time.monotonic()
+    result = synthesise(core_verilog(params), "cyclonev", "npstereo_core", timeout=1.0,
+                        engine="native", keep=tmp_path)
+    assert result["status"] == "timeout", result
+    assert result["message"] == "killed after 1 s"
+    assert time.monotonic() - started < 10
+    assert not _processes_in(tmp_path)
+
+
+def test_timeout_kills_what_the_tool_started(tmp_path):
+    """Broken variant of killing only the tool: its child (ABC's role) would survive."""
+    script = ("import subprocess, time\n"
+              "subprocess.Popen(['sleep', '60'])\n"
+              "time.sleep(60)\n")
+    command = [sys.executable, "-c", script]
+    failure = synth._run(command, tmp_path, time.monotonic() + 1.0, "out.log")
+    assert failure == "timeout"
+    time.sleep(0.2)
+    assert not _processes_in(tmp_path)
+
+
+def _processes_in(folder):
+    """Processes whose working directory is ``folder`` (the tools run there)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if Path(os.readlink(entry / "cwd")) == Path(folder):
+                    status = (entry / "status").read_text()
+                    if "\nState:\tZ" not in status:
+                        found.append(entry.name)
+            except OSError:
+                continue
+    return found
+
+
+def test_engine_choice_and_fallback(monkeypatch):
+    with pytest.raises(UserError, match="engine must be one of native, wasm"):
+        synthesise(DESIGN, "ecp5", "top", engine="verilator")
+    assert synth.default_engine() == "native"
+    monkeypatch.setattr(synth, "_native_installed", lambda: False)
+    assert synth.default_engine() == "wasm"
+    with pytest.raises(ToolError, match="pip install pyosys"):
+        synthesise(DESIGN, "ecp5", "top", engine="native")
+
+
+def test_run_yosys_script(tmp_path):
+    (tmp_path / "a.v").write_text("module a(input x, output y); assign y = ~x; endmodule\n")
+    assert run_yosys("read_verilog a.v\nsynth -top a\nwrite_json a.json\n", tmp_path) is None
+    assert (tmp_path / "a.json").exists()
+    failure = run_yosys("read_verilog missing.v\n", tmp_path, engine="native")
+    assert failure is not None and "missing.v" in failure
+
+
+def test_tool_versions_name_the_native_engine():
+    versions = tool_versions()
+    assert versions["pyosys"] == synth.engine_version("native") != "missing"
+    assert versions["flow"] == synth.FLOW_VERSION
