@@ -95,12 +95,19 @@ def opencv_map(cv2, matcher, left, right, disparities, num_disparities):
     return np.where(invalid, INVALID, rounded).astype(np.int16)
 
 
+def mirror(image):
+    """The image flipped left to right (contiguous, as OpenCV wants it)."""
+    return np.ascontiguousarray(image[:, ::-1])
+
+
 def opencv_maps(cv2, matcher, left, right, disparities, num_disparities):
     """(map without check, map after the project's L/R check) of one OpenCV matcher."""
     left_map = opencv_map(cv2, matcher, left, right, disparities, num_disparities)
-    mirrored = opencv_map(cv2, matcher, np.ascontiguousarray(right[:, ::-1]),
-                          np.ascontiguousarray(left[:, ::-1]), disparities, num_disparities)
-    right_map = mirrored[:, ::-1]
+    # In the mirrored pair the right view is the reference and disparities stay positive:
+    # right pixel xr becomes column W-1-xr of the new left image, its partner xr + d
+    # column W-1-xr-d of the new right image.
+    right_map = mirror(opencv_map(cv2, matcher, mirror(right), mirror(left), disparities,
+                                  num_disparities))
     # lr_check compares |dL - dR|; an invalid right pixel must never pass, so it gets a
     # value no disparity is within the threshold of.
     right_map = np.where(right_map < 0, -10 * disparities, right_map)
