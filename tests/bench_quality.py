@@ -1,7 +1,10 @@
 """Quality side by side: npstereo's box and SGM configurations against OpenCV's matchers.
 
 Usage: ``python tests/bench_quality.py --dataset DIR [--disparities 100] [--json FILE]``,
-where DIR is a Middlebury scene folder (any layout golden/data.py loads, e.g. teddy). Every
+where DIR is a Middlebury scene folder (any layout golden/data.py loads, e.g. teddy), or
+``--synthetic [--seed N]`` for the project's synthetic scene (256 x 192, D = 48); both
+take ``--noise VARIANCE`` (golden/degrade.py, seeded by ``--seed``), and ``--mirrored``
+makes the other view of a Middlebury 2003 folder the reference (ground truth disp6.pgm). Every
 map is scored with the project's own metric (golden/quality.py: |d - gt| <= 1 over the
 pixels with known ground truth at x >= D, an invalid pixel counts as wrong), with and
 without the project's L/R check (threshold 3), and the table ends with the ratio of the
@@ -44,11 +47,13 @@ from pathlib import Path
 import numpy as np
 
 from npstereo.golden import sgm
-from npstereo.golden.data import load_middlebury
+from npstereo.golden.data import StereoPair, load_middlebury, read_image
+from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.lr_check import INVALID, lr_check
 from npstereo.golden.params import StereoParams, UserError
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
+from npstereo.golden.synthetic import synthetic_pair
 
 #: L/R threshold of the project's default configuration (docs/semantics.md).
 LR_THRESHOLD = 3
@@ -58,7 +63,7 @@ BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 
 #: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent).
 #: The first is the recommended default (docs/sgm.md, "Choosing the defaults").
-SGM = [("census", 5, 12, 64, 4), ("census", 5, 12, 32, None), ("census", 7, 24, 96, 4)]
+SGM = [("census", 5, 16, 96, 4), ("census", 5, 12, 32, None), ("census", 5, 20, 64, 5)]
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).
@@ -122,11 +127,48 @@ def score(disparity, truth, disparities):
                 error_rate=quality.error_rate)
 
 
+def load(args):
+    """(pair, left gray, right gray, ground truth, D) as the arguments ask."""
+    if args.synthetic:
+        disparities = args.disparities or 48
+        pair = synthetic_pair(256, 192, disparities, seed=args.seed)
+    else:
+        disparities = args.disparities or 100
+        pair = load_middlebury(args.dataset)
+    StereoParams(disparities=disparities)
+    if pair.ground_truth is None:
+        raise UserError(f"{args.dataset} has no ground truth")
+    left, right = pair.gray()
+    truth, name = pair.ground_truth, pair.name
+    if args.mirrored:
+        if args.synthetic or not (args.dataset / "disp6.pgm").is_file():
+            raise UserError("--mirrored needs a Middlebury 2003 folder with disp6.pgm")
+        # The right view is the reference of the mirrored pair; its ground truth is stored
+        # like disp2.pgm (4 x disparity, 0 unknown).
+        right_truth = read_image(args.dataset / "disp6.pgm", "ground truth").astype(float)
+        truth = np.where(right_truth == 0, np.nan, right_truth / 4)[:, ::-1]
+        left, right = mirror(right), mirror(left)
+        name += " mirrored"
+    if args.noise:
+        left, right = gaussian_noise_pair(left, right, args.noise, args.seed)
+        name += f" noise {args.noise:g}"
+    return (StereoPair(name, left, right, np.ascontiguousarray(truth)), left, right,
+            np.ascontiguousarray(truth), disparities)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--dataset", required=True, type=Path,
-                        help="Middlebury scene folder (e.g. teddy)")
-    parser.add_argument("--disparities", type=int, default=100, help="D (default 100)")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--dataset", type=Path, help="Middlebury scene folder (e.g. teddy)")
+    source.add_argument("--synthetic", action="store_true",
+                        help="the project's synthetic scene (256 x 192) instead")
+    parser.add_argument("--disparities", type=int, default=None,
+                        help="D (default 100, synthetic 48)")
+    parser.add_argument("--noise", type=float, default=0.0,
+                        help="gaussian noise variance on the [0, 1] scale (default none)")
+    parser.add_argument("--seed", type=int, default=0, help="synthetic scene and noise seed")
+    parser.add_argument("--mirrored", action="store_true",
+                        help="the right view as the reference (Middlebury 2003: disp6.pgm)")
     parser.add_argument("--json", type=Path, help="also write the rows as JSON")
     args = parser.parse_args(argv)
     try:
@@ -136,16 +178,10 @@ def main(argv=None):
               "(pip install -e '.[bench]')", file=sys.stderr)
         return 2
     try:
-        pair = load_middlebury(args.dataset)
-        StereoParams(disparities=args.disparities)
+        pair, left, right, truth, disparities = load(args)
     except UserError as error:
         print(f"bench_quality: {error}", file=sys.stderr)
         return 2
-    if pair.ground_truth is None:
-        print(f"bench_quality: {args.dataset} has no ground truth", file=sys.stderr)
-        return 2
-    left, right = pair.gray()
-    truth, disparities = pair.ground_truth, args.disparities
     num_disparities = -(-disparities // 16) * 16
     print(f"quality on {pair.name} ({left.shape[1]}x{left.shape[0]}), D = {disparities}, "
           f"metric of golden/quality.py, L/R threshold {LR_THRESHOLD}; OpenCV "
