@@ -24,7 +24,9 @@ from .params import ParameterError, StereoParams
 from .pipeline import DisparityResult
 from .transform import transform
 
-__all__ = ["PATHS", "PATH_STEPS", "SgmWidths", "widths", "check_penalties", "cost_volume",
+__all__ = ["PATHS", "PATH_STEPS", "ROW_PATHS", "DEFAULT_TRANSFORM", "DEFAULT_BLOCK",
+           "DEFAULT_P1", "DEFAULT_P2", "DEFAULT_ADAPT", "SgmWidths", "max_path_penalty",
+           "widths", "row_memory_bits", "check_penalties", "cost_volume",
            "path_p2", "path_costs", "aggregate", "winners", "disparity_from_summed",
            "disparity_map"]
 
@@ -33,6 +35,19 @@ PATHS = ("left", "top-left", "top", "top-right")
 
 #: (dx, dy) from a pixel p to its predecessor p - r on each path.
 PATH_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
+
+#: The recommended configuration, chosen by measurement (docs/sgm.md, "Choosing the
+#: defaults"): census 5x5, P1 = 16, P2 = 96, adaptive P2 with t = 4. The path cost is then
+#: bitlen(24 + 96) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
+DEFAULT_TRANSFORM = "census"
+DEFAULT_BLOCK = 5
+DEFAULT_P1 = 16
+DEFAULT_P2 = 96
+DEFAULT_ADAPT = 4
+
+#: Paths whose predecessor lies in the previous row: their path costs of a whole row are
+#: kept in block RAM.
+ROW_PATHS = ("top-left", "top", "top-right")
 
 #: Adaptive P2 works on 8-bit gray steps: g = |I(p) - I(p - r)| <= 255 has 8 bits, so a
 #: threshold exponent above 8 could never shift and is rejected as meaningless.
@@ -120,6 +135,18 @@ def widths(max_cost, p1, p2, paths=PATHS):
                      step=int(p2).bit_length(),
                      candidate=(max_cost + 2 * p2).bit_length(),
                      summed=(len(tuple(paths)) * (max_cost + p2)).bit_length())
+
+
+def row_memory_bits(width, disparities, max_cost, p2, paths=PATHS):
+    """Block-RAM bits SGM needs for the previous row: (path costs, minima).
+
+    Each configured path from the row above keeps W x D path costs of bitlen(Cmax + P2)
+    bits; the second number is its W minima m of the same width, for hardware that
+    stores them instead of recomputing them.
+    """
+    bits = (max_cost + p2).bit_length()
+    rows = sum(1 for path in paths if path in ROW_PATHS)
+    return rows * width * disparities * bits, rows * width * bits
 
 
 def _dtype(max_cost, p2, n_paths):

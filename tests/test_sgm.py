@@ -314,6 +314,16 @@ def test_path_width_bound_is_reached(cmax, p1, p2):
     assert got.max() == cmax + p2
 
 
+def test_row_memory_of_the_defaults_fits_one_mebibit():
+    cmax = StereoParams(transform=sgm.DEFAULT_TRANSFORM, block=sgm.DEFAULT_BLOCK).max_cost
+    costs, minima = sgm.row_memory_bits(450, 100, cmax, sgm.DEFAULT_P2)
+    assert (costs, minima) == (3 * 450 * 100 * 7, 3 * 450 * 7)
+    assert costs + minima <= 2 ** 20
+    # Counterpart: one bit more per path cost (P2 = 104) would not fit.
+    assert sum(sgm.row_memory_bits(450, 100, cmax, 104)) > 2 ** 20
+    assert sgm.row_memory_bits(450, 100, cmax, 96, ("left",)) == (0, 0)
+
+
 # Ties ------------------------------------------------------------------------------------------
 
 
