@@ -37,13 +37,13 @@ PATHS = ("left", "top-left", "top", "top-right")
 PATH_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
 
 #: The recommended configuration, chosen by measurement (docs/sgm.md, "Choosing the
-#: defaults"): census 5x5, P1 = 16, P2 = 96, adaptive P2 with t = 4. The path cost is then
-#: bitlen(24 + 96) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
+#: defaults"): census 7x7, P1 = 24, P2 = 79, adaptive P2 with t = 5. The path cost is then
+#: bitlen(48 + 79) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
 DEFAULT_TRANSFORM = "census"
-DEFAULT_BLOCK = 5
-DEFAULT_P1 = 16
-DEFAULT_P2 = 96
-DEFAULT_ADAPT = 4
+DEFAULT_BLOCK = 7
+DEFAULT_P1 = 24
+DEFAULT_P2 = 79
+DEFAULT_ADAPT = 5
 
 #: Paths whose predecessor lies in the previous row: their path costs of a whole row are
 #: kept in block RAM.

@@ -63,7 +63,10 @@ BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 
 #: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent).
 #: The first is the recommended default (docs/sgm.md, "Choosing the defaults").
-SGM = [("census", 5, 16, 96, 4), ("census", 5, 12, 32, None), ("census", 5, 20, 64, 5)]
+SGM = [(sgm.DEFAULT_TRANSFORM, sgm.DEFAULT_BLOCK, sgm.DEFAULT_P1, sgm.DEFAULT_P2,
+        sgm.DEFAULT_ADAPT),
+       ("census", 5, 16, 96, 4),      # the best census 5x5 on clean real scenes
+       ("census", 5, 12, 32, None)]   # the best census 5x5 with a constant P2
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).

@@ -319,8 +319,9 @@ def test_row_memory_of_the_defaults_fits_one_mebibit():
     costs, minima = sgm.row_memory_bits(450, 100, cmax, sgm.DEFAULT_P2)
     assert (costs, minima) == (3 * 450 * 100 * 7, 3 * 450 * 7)
     assert costs + minima <= 2 ** 20
-    # Counterpart: one bit more per path cost (P2 = 104) would not fit.
-    assert sum(sgm.row_memory_bits(450, 100, cmax, 104)) > 2 ** 20
+    sgm.check_penalties(cmax, sgm.DEFAULT_P1, sgm.DEFAULT_P2, sgm.DEFAULT_ADAPT)
+    # Counterpart: one more step of P2 makes the path cost 8 bits, which would not fit.
+    assert sum(sgm.row_memory_bits(450, 100, cmax, sgm.DEFAULT_P2 + 1)) > 2 ** 20
     assert sgm.row_memory_bits(450, 100, cmax, 96, ("left",)) == (0, 0)
 
 

@@ -42,6 +42,8 @@ SYNTH_GRID = dict(p1=(8, 12, 16, 20, 24), p2=(32, 64, 96), adapt=(None, 3, 4, 5)
 #: Other transforms on teddy: (name, block), penalties as fractions of Cmax.
 OTHER = [("census", 3), ("census", 7), ("census", 9), ("rank", 5), ("ext-census", 5)]
 OTHER_FRACTIONS = [(1 / 2, 4 / 3), (1 / 2, 8 / 3)]
+#: Census 7x7 in every condition, P2 <= 79 so that its path cost stays at 7 bits as well.
+CENSUS7_GRID = dict(p1=(16, 24, 32), p2=(48, 64, 79), adapt=(None, 4, 5))
 NOISE = (0.0, 2e-4, 2e-3)
 SEEDS = (0, 1, 2)
 
@@ -81,12 +83,23 @@ def run(left, right, truth, transform, block, disparities, configs, label, rows,
         out.write_text(json.dumps({"rows": rows}, indent=0) + "\n")
 
 
+def synthetic(seed, noise):
+    """(left, right, ground truth) of a synthetic scene with noise of this variance."""
+    scene = synthetic_pair(256, 192, 48, seed=seed)
+    left, right = scene.gray()
+    if noise:
+        left, right = gaussian_noise_pair(left, right, noise, seed=seed)
+    return left, right, scene.ground_truth
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dataset", type=Path)
     parser.add_argument("--out", type=Path, required=True)
-    parser.add_argument("--only", choices=("teddy", "other", "synthetic", "mirrored"),
-                        nargs="*", default=("teddy", "other", "synthetic", "mirrored"))
+    parser.add_argument("--only", choices=("teddy", "other", "synthetic", "mirrored",
+                                           "census7"),
+                        nargs="*", default=("teddy", "other", "synthetic", "mirrored",
+                                            "census7"))
     parser.add_argument("--report", choices=("lr3", "nolr"),
                         help="print the tables of an existing --out instead of measuring")
     args = parser.parse_args(argv)
@@ -111,91 +124,105 @@ def main(argv=None):
                 rows, args.out)
     if "synthetic" in args.only:
         for seed, noise in itertools.product(SEEDS, NOISE):
-            scene = synthetic_pair(256, 192, 48, seed=seed)
-            sl, sr = scene.gray()
-            if noise:
-                sl, sr = gaussian_noise_pair(sl, sr, noise, seed=seed)
-            run(sl, sr, scene.ground_truth, "census", 5, 48, list(grid(SYNTH_GRID, 24)),
+            sl, sr, truth = synthetic(seed, noise)
+            run(sl, sr, truth, "census", 5, 48, list(grid(SYNTH_GRID, 24)),
                 f"synthetic s{seed} noise {noise:g}", rows, args.out)
+    # The other view of the same scene as the reference (its own ground truth, disp6.pgm,
+    # its own occlusions): the pair mirrored left to right.
+    truth = read_image(args.dataset / "disp6.pgm", "ground truth").astype(np.float64)
+    mirrored = (np.ascontiguousarray(right[:, ::-1]), np.ascontiguousarray(left[:, ::-1]),
+                np.ascontiguousarray(np.where(truth == 0, np.nan, truth / 4)[:, ::-1]))
     if "mirrored" in args.only:
-        # The other view of the same scene as the reference (its own ground truth,
-        # disp6.pgm, its own occlusions): the pair mirrored left to right.
-        truth = read_image(args.dataset / "disp6.pgm", "ground truth").astype(np.float64)
-        truth = np.where(truth == 0, np.nan, truth / 4)[:, ::-1]
-        run(np.ascontiguousarray(right[:, ::-1]), np.ascontiguousarray(left[:, ::-1]),
-            np.ascontiguousarray(truth), "census", 5, 100, list(grid(SYNTH_GRID, 24)),
-            f"{pair.name} mirrored", rows, args.out)
+        run(*mirrored, "census", 5, 100, list(grid(SYNTH_GRID, 24)), f"{pair.name} mirrored",
+            rows, args.out)
+    if "census7" in args.only:
+        configs = list(grid(CENSUS7_GRID, 48))
+        run(left, right, pair.ground_truth, "census", 7, 100, configs, pair.name, rows,
+            args.out)
+        run(*mirrored, "census", 7, 100, configs, f"{pair.name} mirrored", rows, args.out)
+        for seed, noise in itertools.product(SEEDS, NOISE):
+            sl, sr, truth = synthetic(seed, noise)
+            run(sl, sr, truth, "census", 7, 48, configs, f"synthetic s{seed} noise {noise:g}",
+                rows, args.out)
     return 0
 
 
 
 # Report ------------------------------------------------------------------------------------
 
-
-def _key(row):
-    return (row["p1"], row["p2"], row["adapt"])
+#: Candidate transforms of the selection: measured in every condition.
+CANDIDATES = (("census", 5), ("census", 7))
 
 
 def _adapt_text(adapt):
     return "off" if adapt is None else f"t={adapt}"
 
 
+def _condition(scene):
+    """Teddy views by name; synthetic scenes pooled over seeds per noise level."""
+    return f"synthetic noise {scene.split()[-1]}" if scene.startswith("synthetic") else scene
+
+
 def report(rows, check="lr3"):
-    """Markdown tables of a sweep (``check``: "lr3" or "nolr") and the chosen defaults."""
+    """Markdown tables of a sweep (``check``: "lr3" or "nolr") and the selection.
+
+    The selection rule: among the configurations measured in every condition (teddy,
+    teddy mirrored, synthetic at each noise level, the mean over the seeds), the one whose
+    largest shortfall to the best configuration of a condition is smallest.
+    """
     lines = []
-    teddy = {(r["scene"], r["transform"], r["block"]): {} for r in rows}
+    values = {}
     for r in rows:
-        teddy[(r["scene"], r["transform"], r["block"])][_key(r)] = r[check]
-    main = teddy[("teddy", "census", 5)]
-    p1s = sorted({k[0] for k in main})
-    p2s = sorted({k[1] for k in main})
-    for adapt in sorted({k[2] for k in main}, key=lambda a: a or 0):
-        lines.append(f"\nteddy, census 5x5, adaptive P2 {_adapt_text(adapt)}: correct (%), "
-                     f"rows P1, columns P2\n")
-        lines.append("| P1 \\ P2 | " + " | ".join(str(p) for p in p2s) + " |")
-        lines.append("|---:|" + "---:|" * len(p2s))
-        for p1 in p1s:
-            cells = [f"{main[(p1, p2, adapt)]:.2f}" if (p1, p2, adapt) in main else ""
-                     for p2 in p2s]
-            lines.append(f"| {p1} | " + " | ".join(cells) + " |")
-    # Conditions: teddy and the synthetic scenes averaged over seeds per noise level.
-    conditions = {"teddy": main}
-    for (scene, transform, block), values in teddy.items():
-        if scene.endswith("mirrored") and (transform, block) == ("census", 5):
-            conditions[scene] = values
-    for noise in NOISE:
-        scenes = [v for (scene, t, b), v in teddy.items()
-                  if scene.startswith("synthetic") and scene.endswith(f"noise {noise:g}")]
-        if scenes:
-            common = set.intersection(*(set(s) for s in scenes))
-            conditions[f"synthetic noise {noise:g}"] = {
-                k: sum(s[k] for s in scenes) / len(scenes) for k in common}
-    common = set.intersection(*(set(v) for v in conditions.values()))
-    best = {name: max(values[k] for k in common) for name, values in conditions.items()}
-    regret = {k: max(best[n] - conditions[n][k] for n in conditions) for k in common}
-    ranked = sorted(common, key=lambda k: (regret[k], -conditions["teddy"][k]))
-    lines.append(f"\nConfigurations measured in every condition, by their largest shortfall "
-                 f"to the best of each condition (the selection rule), top 15:\n")
-    lines.append("| P1 | P2 | adaptive | " + " | ".join(conditions) + " | largest shortfall |")
-    lines.append("|---:|---:|---|" + "---:|" * (len(conditions) + 1))
-    for k in ranked[:15]:
-        lines.append(f"| {k[0]} | {k[1]} | {_adapt_text(k[2])} | "
-                     + " | ".join(f"{conditions[n][k]:.2f}" for n in conditions)
-                     + f" | {regret[k]:.2f} |")
-    lines.append("| best of each | | | " + " | ".join(f"{best[n]:.2f}" for n in conditions)
+        values.setdefault((r["scene"], r["transform"], r["block"]), {})[
+            (r["p1"], r["p2"], r["adapt"])] = r[check]
+    for transform, block in CANDIDATES:
+        main = values.get(("teddy", transform, block), {})
+        p1s, p2s = sorted({k[0] for k in main}), sorted({k[1] for k in main})
+        for adapt in sorted({k[2] for k in main}, key=lambda a: a or 0):
+            lines.append(f"\nteddy, {transform} {block}x{block}, adaptive P2 "
+                         f"{_adapt_text(adapt)}: correct (%), rows P1, columns P2\n")
+            lines.append("| P1 \\ P2 | " + " | ".join(str(p) for p in p2s) + " |")
+            lines.append("|---:|" + "---:|" * len(p2s))
+            for p1 in p1s:
+                cells = [f"{main[(p1, p2, adapt)]:.2f}" if (p1, p2, adapt) in main else ""
+                         for p2 in p2s]
+                lines.append(f"| {p1} | " + " | ".join(cells) + " |")
+    # condition -> candidate (transform, block, p1, p2, adapt) -> list of scores
+    pooled = {}
+    for (scene, transform, block), scores in values.items():
+        if (transform, block) not in CANDIDATES:
+            continue
+        condition = pooled.setdefault(_condition(scene), {})
+        for k, v in scores.items():
+            condition.setdefault((transform, block) + k, []).append(v)
+    names = sorted(pooled, key=lambda c: (not c.startswith("teddy"), c))
+    means = {c: {k: sum(v) / len(v) for k, v in pooled[c].items()} for c in names}
+    common = set.intersection(*(set(means[c]) for c in names))
+    best = {c: max(means[c][k] for k in common) for c in names}
+    shortfall = {k: max(best[c] - means[c][k] for c in names) for k in common}
+    ranked = sorted(common, key=lambda k: (shortfall[k], -means["teddy"][k]))
+    lines.append("\nConfigurations measured in every condition, by their largest shortfall to "
+                 "the best of each condition (the selection rule), top 12:\n")
+    lines.append("| transform | P1 | P2 | adaptive | " + " | ".join(names)
+                 + " | largest shortfall |")
+    lines.append("|---|---:|---:|---|" + "---:|" * (len(names) + 1))
+    for k in ranked[:12]:
+        lines.append(f"| {k[0]} {k[1]}x{k[1]} | {k[2]} | {k[3]} | {_adapt_text(k[4])} | "
+                     + " | ".join(f"{means[c][k]:.2f}" for c in names)
+                     + f" | {shortfall[k]:.2f} |")
+    lines.append("| best of each | | | | " + " | ".join(f"{best[c]:.2f}" for c in names)
                  + " | |")
-    others = [(key, v) for key, v in teddy.items()
-              if key[0] == "teddy" and key != ("teddy", "census", 5)]
+    others = [(key, v) for key, v in values.items()
+              if key[0] == "teddy" and key[1:] not in CANDIDATES]
     if others:
         lines.append("\nOther transforms on teddy (penalties scaled to Cmax):\n")
         lines.append("| transform | P1 | P2 | adaptive | correct (%) |")
         lines.append("|---|---:|---:|---|---:|")
-        for (scene, transform, block), values in sorted(others):
-            for k in sorted(values, key=lambda k: (k[0], k[1], k[2] or 0)):
+        for (_, transform, block), scores in sorted(others):
+            for k in sorted(scores, key=lambda k: (k[0], k[1], k[2] or 0)):
                 lines.append(f"| {transform} {block}x{block} | {k[0]} | {k[1]} | "
-                             f"{_adapt_text(k[2])} | {values[k]:.2f} |")
+                             f"{_adapt_text(k[2])} | {scores[k]:.2f} |")
     return "\n".join(lines)
-
 
 if __name__ == "__main__":
     sys.exit(main())
