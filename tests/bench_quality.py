@@ -233,7 +233,10 @@ def main(argv=None):
     peer = best["peer"]
     print(f"\nbest peer: {peer['method']} (L/R check {peer['lr_check']}) "
           f"{peer['correct']:.2f} %")
-    for label, row in (("best npstereo SGM", best["npstereo SGM"]),
+    default = [r for r in rows if r["family"] == "npstereo SGM"][:2]  # SGM[0], both checks
+    for label, row in (("default npstereo SGM without the L/R check", default[0]),
+                       ("default npstereo SGM with the L/R check", default[1]),
+                       ("best npstereo SGM", best["npstereo SGM"]),
                        ("best npstereo SGM with the L/R check", best_sgm_checked),
                        ("best npstereo box", best["npstereo box"])):
         ratio = row["correct"] / peer["correct"]

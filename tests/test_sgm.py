@@ -277,6 +277,8 @@ def test_widths_formulae():
     assert (w.cost, w.path, w.step, w.candidate, w.summed) == (5, 7, 7, 8, 9)
     assert sgm.max_path_penalty(24) == 103 and sgm.widths(24, 12, 103).path == 7
     assert sgm.widths(80, 10, 47).path == 7 and sgm.widths(80, 10, 48).path == 8
+    w = sgm.widths(48, 24, 79)  # the defaults, census 7x7
+    assert (w.cost, w.path, w.step, w.candidate, w.summed) == (6, 7, 7, 8, 9)
 
 
 @pytest.mark.parametrize("cmax", [1, 24, 48, 6120, 91800])
