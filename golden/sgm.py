@@ -49,9 +49,10 @@ DEFAULT_ADAPT = 5
 #: kept in block RAM.
 ROW_PATHS = ("top-left", "top", "top-right")
 
-#: Adaptive P2 works on 8-bit gray steps: g = |I(p) - I(p - r)| <= 255 has 8 bits, so a
-#: threshold exponent above 8 could never shift and is rejected as meaningless.
-_MAX_ADAPT = 8
+#: Adaptive P2 works on 8-bit gray steps: g = |I(p) - I(p - r)| <= 255 has at most 8 bits,
+#: so from t = 8 on the shift bitlen(g) - t is never positive: such a t would be a constant
+#: P2 in disguise and is rejected.
+_MAX_ADAPT = 7
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,7 @@ def check_penalties(max_cost, p1, p2, adapt=None, paths=PATHS):
     p1, p2 : int
         Penalties: 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax).
     adapt : int or None
-        Adaptive-P2 threshold exponent t, 1 <= t <= 8, or None for a constant P2.
+        Adaptive-P2 threshold exponent t, 1 <= t <= 7, or None for a constant P2.
     paths : sequence of str
         A non-empty subset of :data:`PATHS`, each at most once.
     """
@@ -377,7 +378,7 @@ def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=
     paths : sequence of str
         Subset of :data:`PATHS` to sum.
     adapt : int or None
-        Adaptive-P2 threshold exponent t (1 .. 8), None for a constant P2.
+        Adaptive-P2 threshold exponent t (1 .. 7), None for a constant P2.
     threads : int, optional
         Worker threads (paths run in parallel).
 
