@@ -272,12 +272,21 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
     if path not in PATH_STEPS:
         raise ParameterError(f"SGM path must be one of {', '.join(PATHS)}, not {path!r}")
     volume = np.asarray(volume)
+    if volume.ndim != 3:
+        raise ParameterError(f"cost volume must be (H, W, D), not of shape {volume.shape}")
     height, width, _ = volume.shape
+    largest = int(volume.max()) if volume.size else 0
     if max_cost is None:
-        max_cost = int(volume.max()) if volume.size else 0
+        max_cost = largest
     check_penalties(max_cost, p1, p2, adapt)
+    # The widths (and the dtype below) are derived from Cmax: a larger cost would break them.
+    if largest > max_cost:
+        raise ParameterError(f"matching costs must be <= Cmax = {max_cost}, not {largest}")
     if adapt is not None and guide is None:
         raise ParameterError("adaptive P2 needs the left gray image as guide")
+    if guide is not None and np.shape(guide) != (height, width):
+        raise ParameterError(f"guide image must be {width}x{height}, not of shape "
+                             f"{np.shape(guide)}")
     dtype = _dtype(max_cost, p2, len(PATHS))
     costs = volume.astype(dtype, copy=False)
     p1 = dtype(p1)

@@ -479,6 +479,22 @@ def test_bad_parameters_are_rejected(p1, p2, adapt, paths, message):
         sgm.check_penalties(24, p1, p2, adapt, paths)
 
 
+def test_bad_volumes_are_rejected():
+    costs = np.full((3, 4, 5), 24, dtype=np.uint16)
+    with pytest.raises(ParameterError, match="matching costs must be <= Cmax = 23, not 24"):
+        sgm.path_costs(costs, "left", 1, 5, max_cost=23)
+    with pytest.raises(ParameterError, match="cost volume must be"):
+        sgm.path_costs(costs[0], "left", 1, 5, max_cost=24)
+    with pytest.raises(ParameterError, match="guide image must be 4x3"):
+        sgm.path_costs(costs, "top", 1, 5, guide=np.zeros((4, 3), np.uint8), adapt=2)
+    with pytest.raises(ParameterError, match="needs the left gray image"):
+        sgm.path_costs(costs, "top", 1, 5, adapt=2)
+    with pytest.raises(ParameterError, match="SGM path must be one of"):
+        sgm.path_costs(costs, "bottom", 1, 5)
+    # Counterpart: Cmax equal to the largest cost is fine.
+    assert sgm.path_costs(costs, "left", 1, 5, max_cost=24).shape == costs.shape
+
+
 def test_boundary_parameters_are_accepted():
     # Counterpart: the edges of every allowed range pass.
     for p1, p2, adapt in ((0, 0, None), (0, 103, 1), (103, 103, 7)):
