@@ -49,6 +49,11 @@ DEFAULT_ADAPT = 5
 #: kept in block RAM.
 ROW_PATHS = ("top-left", "top", "top-right")
 
+#: Elements of one band's cost volume in :func:`disparity_map` (rows x W x D): 4 Mi, a few
+#: MiB per band volume, so that memory stays bounded for any frame size while the left
+#: path's loop over x still handles many rows per numpy call.
+_BAND_ELEMENTS = 1 << 22
+
 #: Adaptive P2 works on 8-bit gray steps: g = |I(p) - I(p - r)| <= 255 has at most 8 bits,
 #: so from t = 8 on the shift bitlen(g) - t is never positive: such a t would be a constant
 #: P2 in disguise and is rejected.
@@ -181,12 +186,22 @@ def cost_volume(left, right, params, dtype=None, threads=None):
     threads : int, optional
         Threads for the two transforms.
     """
-    left, right = np.asarray(left, np.uint8), np.asarray(right, np.uint8)
-    height, width = left.shape
-    with ThreadPoolExecutor(max_workers=threads or 2) as pool:
-        left_t, right_t = pool.map(lambda image: transform(image, params), (left, right))
+    left_t, right_t = _transforms(left, right, params, threads)
     if dtype is None:
         dtype = np.uint16 if params.max_cost <= np.iinfo(np.uint16).max else np.uint32
+    return _band_costs(left_t, right_t, params, dtype)
+
+
+def _transforms(left, right, params, threads):
+    """The transformed left and right images (computed in parallel)."""
+    images = (np.asarray(left, np.uint8), np.asarray(right, np.uint8))
+    with ThreadPoolExecutor(max_workers=threads or 2) as pool:
+        return list(pool.map(lambda image: transform(image, params), images))
+
+
+def _band_costs(left_t, right_t, params, dtype):
+    """C of a band of transformed rows (last two axes rows, W): (rows, W, D) of ``dtype``."""
+    height, width = left_t.shape[-2:]
     volume = np.empty((height, width, params.disparities), dtype)
     # matching_costs wants an output of the box pipeline's cost dtype, which is wide enough
     # for every C (it holds A*A*Cmax).
@@ -292,30 +307,50 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
     p1 = dtype(p1)
     p2_map = path_p2(guide if guide is not None else np.zeros((height, width), np.uint8),
                      path, int(p1), p2, adapt).astype(dtype)
+    out = np.empty_like(costs)
     dx, dy = PATH_STEPS[path]
     if dy == 0:
-        # Left path: the recurrence runs along x, every row at once. Column-major copies
-        # make each step's (H, D) slices contiguous.
-        costs_t = np.ascontiguousarray(costs.transpose(1, 0, 2))
-        p2_t = np.ascontiguousarray(p2_map.T)[:, :, None]
-        out_t = np.empty_like(costs_t)
-        out_t[0] = costs_t[0]
-        scratch = np.empty_like(costs_t[0])
-        for x in range(1, width):
-            _step(costs_t[x], out_t[x - 1], p1, p2_t[x], out_t[x], scratch)
-        return out_t.transpose(1, 0, 2)
-    # Paths from the row above: the recurrence runs along y, every column of a row at once;
-    # the predecessor row is the previous output row shifted by dx columns.
-    out = np.empty_like(costs)
-    out[0] = costs[0]
+        return _left_band(costs, p1, p2_map, out)
+    return _row_band(costs, dx, p1, p2_map, None, out)
+
+
+def _left_band(costs, p1, p2_map, out):
+    """The left path over a band of rows (each row is independent): writes ``out``.
+
+    The recurrence runs along x, every row of the band at once; column-major copies make
+    each step's (rows, D) slices contiguous.
+    """
+    width = costs.shape[1]
+    costs_t = np.ascontiguousarray(costs.transpose(1, 0, 2))
+    p2_t = np.ascontiguousarray(p2_map.T)[:, :, None]
+    out_t = np.empty_like(costs_t)
+    out_t[0] = costs_t[0]  # x = 0: fresh start
+    scratch = np.empty_like(costs_t[0])
+    for x in range(1, width):
+        _step(costs_t[x], out_t[x - 1], p1, p2_t[x], out_t[x], scratch)
+    out[...] = out_t.transpose(1, 0, 2)
+    return out
+
+
+def _row_band(costs, dx, p1, p2_map, previous, out):
+    """A path from the row above (dy = -1, predecessor column x + dx) over a band of rows.
+
+    ``previous`` is L of the image row just above the band, or None when the band starts
+    at the top of the image (y = 0: fresh start). The recurrence runs along y, every
+    column of a row at once; the predecessor row is the previous output row shifted by dx.
+    """
+    rows, width = costs.shape[:2]
     x0, x1 = max(0, -dx), width - max(0, dx)  # columns that have a predecessor
     scratch = np.empty_like(costs[0, x0:x1])
-    for y in range(1, height):
-        if dx < 0:
-            out[y, :x0] = costs[y, :x0]
-        elif dx > 0:
-            out[y, x1:] = costs[y, x1:]
-        _step(costs[y, x0:x1], out[y - 1, x0 + dx:x1 + dx], p1, p2_map[y, x0:x1, None],
+    for y in range(rows):
+        above = out[y - 1] if y else previous
+        if above is None:
+            out[y] = costs[y]
+            continue
+        # The column whose predecessor is outside the image starts fresh.
+        out[y, :x0] = costs[y, :x0]
+        out[y, x1:] = costs[y, x1:]
+        _step(costs[y, x0:x1], above[x0 + dx:x1 + dx], p1, p2_map[y, x0:x1, None],
               out[y, x0:x1], scratch)
     return out
 
@@ -365,9 +400,14 @@ def winners(summed):
 def disparity_from_summed(summed, lr_threshold):
     """The final map from S: WTA, L/R check (threshold or None), columns x < D invalid."""
     raw_left, raw_right = winners(summed)
+    return _checked(raw_left, raw_right, summed.shape[2], lr_threshold)
+
+
+def _checked(raw_left, raw_right, disparities, lr_threshold):
+    """DisparityResult of the raw maps: L/R check (threshold or None), x < D invalid."""
     checked = raw_left if lr_threshold is None else lr_check(raw_left, raw_right, lr_threshold)
     checked = checked.astype(np.int16, copy=True)
-    checked[:, :summed.shape[2]] = INVALID
+    checked[:, :disparities] = INVALID
     return DisparityResult(checked, raw_left, raw_right)
 
 
@@ -406,8 +446,40 @@ def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=
     if left.shape != right.shape:
         raise ParameterError("left and right images must have the same size")
     check_penalties(params.max_cost, p1, p2, adapt, paths)
-    volume = cost_volume(left, right, params, dtype=_dtype(params.max_cost, p2, len(PATHS)),
-                         threads=threads)
-    summed = aggregate(volume, p1, p2, paths, guide=left, adapt=adapt,
-                       max_cost=params.max_cost, threads=threads)
-    return disparity_from_summed(summed, params.lr_threshold)
+    paths = tuple(paths)
+    height, width = left.shape
+    dtype = _dtype(params.max_cost, p2, len(PATHS))
+    left_t, right_t = _transforms(left, right, params, threads)
+    p2_maps = {path: path_p2(left, path, p1, p2, adapt).astype(dtype) for path in paths}
+    p1 = dtype(p1)
+    # Bands of rows bound the memory (a few band volumes instead of several image volumes);
+    # the paths from above carry their last row from one band into the next, the left
+    # path and the winners work row by row anyway, so bands change no bit of the result.
+    rows = max(1, _BAND_ELEMENTS // (width * params.disparities))
+    previous = {path: None for path in paths if path != "left"}
+    raw_left, raw_right = [], []
+    workers = max(1, min(len(paths), threads or os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for y0 in range(0, height, rows):
+            y1 = min(height, y0 + rows)
+            costs = _band_costs(left_t[..., y0:y1, :], right_t[..., y0:y1, :], params, dtype)
+
+            def one_path(path):
+                out = np.empty_like(costs)
+                if path == "left":
+                    return _left_band(costs, p1, p2_maps[path][y0:y1], out)
+                return _row_band(costs, PATH_STEPS[path][0], p1, p2_maps[path][y0:y1],
+                                 previous[path], out)
+
+            parts = list(pool.map(one_path, paths))
+            for path, part in zip(paths, parts):
+                if path != "left":
+                    previous[path] = part[-1].copy()
+            summed = parts[0]
+            for part in parts[1:]:
+                summed += part
+            band_left, band_right = winners(summed)
+            raw_left.append(band_left)
+            raw_right.append(band_right)
+    return _checked(np.concatenate(raw_left), np.concatenate(raw_right), params.disparities,
+                    params.lr_threshold)

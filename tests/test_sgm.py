@@ -226,6 +226,36 @@ def test_disparity_map_matches_reference(name, block, D, kind, p1, p2, adapt, th
             assert np.array_equal(result.disparity, expected), (threshold, rounds)
 
 
+@pytest.mark.parametrize("band_rows", [1, 2, 3])
+def test_disparity_map_band_seams(monkeypatch, band_rows):
+    """Bands of 1-3 rows: the paths from above carry their last row across each seam."""
+    name, block, D, kind, p1, p2, adapt, _ = MAP_CASES[1]
+    left, right = make_pair(kind, 7, D + 9, D)
+    monkeypatch.setattr(sgm, "_BAND_ELEMENTS", band_rows * (D + 9) * D)
+    expected = ref_map(left, right, name, block, D, p1, p2, sgm.PATHS, adapt, 1)
+    params = StereoParams(transform=name, block=block, disparities=D, lr_threshold=1)
+    result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt, threads=3)
+    assert np.array_equal(result.disparity, expected)
+    whole = sgm.disparity_from_summed(
+        sgm.aggregate(sgm.cost_volume(left, right, params), p1, p2, guide=left, adapt=adapt,
+                      max_cost=params.max_cost), 1)
+    assert np.array_equal(result.left, whole.left) and np.array_equal(result.right, whole.right)
+
+
+def test_broken_band_seam_is_caught(monkeypatch):
+    # Paths from above that start fresh at every band instead of carrying the row above.
+    original = sgm._row_band
+    monkeypatch.setattr(sgm, "_row_band", lambda costs, dx, p1, p2_map, previous, out:
+                        original(costs, dx, p1, p2_map, None, out))
+    monkeypatch.setattr(sgm, "_BAND_ELEMENTS", 1)
+    name, block, D, kind, p1, p2, adapt, _ = MAP_CASES[1]
+    left, right = make_pair(kind, 7, D + 9, D)
+    params = StereoParams(transform=name, block=block, disparities=D, lr_threshold=None)
+    expected = ref_map(left, right, name, block, D, p1, p2, sgm.PATHS, adapt, None)
+    result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
+    assert not np.array_equal(result.disparity, expected)
+
+
 def test_disparity_map_keeps_and_rejects():
     # Counterpart of the map comparison: the case has both kept and invalid pixels beyond
     # the border, so an all-invalid or all-kept map could not pass it.
@@ -417,14 +447,14 @@ def test_broken_normalisation_is_caught(monkeypatch):
 
 def test_broken_invalid_disparity_rule_is_caught(monkeypatch):
     # Cost 0 (the box pipeline's rule) instead of Cmax where x - d < 0.
-    original = sgm.cost_volume
+    original = sgm._band_costs
 
-    def zero_outside(left, right, params, dtype=None, threads=None):
-        volume = original(left, right, params, dtype, threads)
+    def zero_outside(left_t, right_t, params, dtype):
+        volume = original(left_t, right_t, params, dtype)
         for d in range(params.disparities):
             volume[:, :d, d] = 0
         return volume
-    monkeypatch.setattr(sgm, "cost_volume", zero_outside)
+    monkeypatch.setattr(sgm, "_band_costs", zero_outside)
     assert broken_case_differs()
 
 
@@ -440,16 +470,14 @@ def test_broken_adaptive_shift_is_caught(monkeypatch):
 
 def test_broken_border_wraps_around(monkeypatch):
     # The left path continuing from the previous row's last pixel instead of starting fresh.
-    original = sgm.path_costs
+    original = sgm._left_band
 
-    def wrapping(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
-        if path != "left":
-            return original(volume, path, p1, p2, guide, adapt, max_cost)
-        height, width, d = volume.shape
-        flat = np.asarray(volume).reshape(1, height * width, d)
-        flat_guide = None if guide is None else np.asarray(guide).reshape(1, -1)
-        return original(flat, path, p1, p2, flat_guide, adapt, max_cost).reshape(volume.shape)
-    monkeypatch.setattr(sgm, "path_costs", wrapping)
+    def wrapping(costs, p1, p2_map, out):
+        rows, width, d = costs.shape
+        flat = original(costs.reshape(1, rows * width, d), p1, p2_map.reshape(1, -1),
+                        out.reshape(1, rows * width, d))
+        return flat.reshape(costs.shape)
+    monkeypatch.setattr(sgm, "_left_band", wrapping)
     assert broken_case_differs()
 
 
