@@ -165,7 +165,8 @@ def test_cost_volume_is_cmax_where_no_partner():
 @pytest.mark.parametrize("path", sgm.PATHS)
 @pytest.mark.parametrize("p1, p2", [(0, 0), (1, 3), (3, 7), (2, 40), (5, 5)])
 def test_each_path_matches_reference(path, p1, p2):
-    rng = np.random.default_rng(hash((path, p1, p2)) % 2 ** 32)
+    # A seed fixed per case (hash() of a string changes from run to run).
+    rng = np.random.default_rng([sgm.PATHS.index(path), p1, p2])
     costs = random_volume(rng, 6, 9, 5, 8)
     expected = as_array(ref_path(costs.tolist(), path, p1, p2))
     assert np.array_equal(golden_path(costs, path, p1, p2, max_cost=8), expected)
