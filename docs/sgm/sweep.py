@@ -15,9 +15,13 @@ as wrong), with the L/R check at T = 3 and without it:
   synthetic grid;
 - the synthetic scenes of golden/synthetic.py (3 seeds, 256 x 192, D = 48) at gaussian
   noise variances 0, 2e-4 and 2e-3 (golden/degrade.py), census 5x5 over a coarser grid,
-  so that the choice is not tuned to teddy alone.
+  so that the choice is not tuned to teddy alone;
+- census 7x7 in all of these conditions, with P2 <= 79 (7-bit path costs).
 
-The cost volume of each scene is computed once; only the aggregation is repeated.
+The cost volume of each scene is computed once; only the aggregation is repeated. An
+existing ``--out`` is extended (configurations already in it are skipped);
+``--report lr3`` or ``--report nolr`` prints the tables of docs/sgm/sweep.md and the
+ranking of the selection rule from it.
 """
 
 import argparse
@@ -106,6 +110,8 @@ def main(argv=None):
     if args.report:
         print(report(json.loads(args.out.read_text())["rows"], args.report))
         return 0
+    if args.dataset is None:
+        parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
     # An existing output is extended: configurations it holds are not measured again.
     rows = json.loads(args.out.read_text())["rows"] if args.out.exists() else []
     pair = load_middlebury(args.dataset)
