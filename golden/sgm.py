@@ -1,0 +1,485 @@
+"""Semi-global aggregation (SGM) along the four raster-order paths, bit-exact integers.
+
+An aggregation choice beside the A x A box of :mod:`.aggregation`: the matching costs C of
+any transform are aggregated along the paths a raster-order stream can compute (left,
+top-left, top, top-right) with integer penalties P1, P2 (optionally P2 adapted to the
+intensity step along the path), normalised by the previous pixel's minimum, and summed.
+The summed costs S then go through the same WTA and right-referenced map as the box
+pipeline. docs/sgm.md is the exact contract; every function here computes it bit for bit
+with integer numpy arithmetic (no floats anywhere).
+
+Array layout: cost volumes are (H, W, D), disparity last, so that the minimum over d and
+the d - 1 / d + 1 neighbours of the recurrence are contiguous operations.
+"""
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from .lr_check import INVALID, lr_check
+from .matching_cost import matching_costs
+from .params import ParameterError, StereoParams
+from .pipeline import DisparityResult
+from .transform import transform
+
+__all__ = ["PATHS", "PATH_STEPS", "ROW_PATHS", "DEFAULT_TRANSFORM", "DEFAULT_BLOCK",
+           "DEFAULT_P1", "DEFAULT_P2", "DEFAULT_ADAPT", "SgmWidths", "max_path_penalty",
+           "widths", "row_memory_bits", "check_penalties", "cost_volume",
+           "path_p2", "path_costs", "aggregate", "winners", "disparity_from_summed",
+           "disparity_map"]
+
+#: The four paths a raster-order stream can compute, in the order they are summed.
+PATHS = ("left", "top-left", "top", "top-right")
+
+#: (dx, dy) from a pixel p to its predecessor p - r on each path.
+PATH_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
+
+#: The recommended configuration, chosen by measurement (docs/sgm.md, "Choosing the
+#: defaults"): census 7x7, P1 = 24, P2 = 79, adaptive P2 with t = 5. The path cost is then
+#: bitlen(48 + 79) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
+DEFAULT_TRANSFORM = "census"
+DEFAULT_BLOCK = 7
+DEFAULT_P1 = 24
+DEFAULT_P2 = 79
+DEFAULT_ADAPT = 5
+
+#: Paths whose predecessor lies in the previous row: their path costs of a whole row are
+#: kept in block RAM.
+ROW_PATHS = ("top-left", "top", "top-right")
+
+#: Elements of one band's cost volume in :func:`disparity_map` (rows x W x D): 4 Mi, a few
+#: MiB per band volume, so that memory stays bounded for any frame size while the left
+#: path's loop over x still handles many rows per numpy call.
+_BAND_ELEMENTS = 1 << 22
+
+#: Adaptive P2 works on 8-bit gray steps: g = |I(p) - I(p - r)| <= 255 has at most 8 bits,
+#: so from t = 8 on the shift bitlen(g) - t is never positive: such a t would be a constant
+#: P2 in disguise and is rejected.
+_MAX_ADAPT = 7
+
+
+@dataclass(frozen=True)
+class SgmWidths:
+    """Exact bit widths of every quantity of the SGM aggregation (docs/sgm.md, "Widths").
+
+    Attributes
+    ----------
+    cost : int
+        C(p, d): bitlen(Cmax).
+    path : int
+        L_r(p, d) and its minimum m_r(p): bitlen(Cmax + P2).
+    step : int
+        The normalised transition term min(...) - m_r(p - r) in 0 .. P2: bitlen(P2).
+    candidate : int
+        The largest candidate inside the min before normalisation, m + P2 <= Cmax + 2 P2:
+        bitlen(Cmax + 2 P2). Hardware that subtracts m first needs only
+        bitlen(Cmax + P2 + P1) for L - m + P1.
+    summed : int
+        S(p, d) = sum over the N paths: bitlen(N (Cmax + P2)).
+    """
+
+    cost: int
+    path: int
+    step: int
+    candidate: int
+    summed: int
+
+
+def _is_int(value):
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def max_path_penalty(max_cost):
+    """Largest P2 allowed for a cost of maximum ``max_cost``.
+
+    The path cost may be at most two bits wider than the matching cost:
+    Cmax + P2 <= 2^(bitlen(Cmax) + 2) - 1. For census 5x5 (Cmax = 24) that is P2 <= 103,
+    which keeps L at 7 bits, the width the block-RAM budget allows at 450 x 375, D = 100.
+    """
+    return (1 << (int(max_cost).bit_length() + 2)) - 1 - int(max_cost)
+
+
+def check_penalties(max_cost, p1, p2, adapt=None, paths=PATHS):
+    """Validate SGM parameters; raise :class:`ParameterError` with a one-line message.
+
+    Parameters
+    ----------
+    max_cost : int
+        Cmax, the largest matching cost of the transform (``StereoParams.max_cost``).
+    p1, p2 : int
+        Penalties: 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax).
+    adapt : int or None
+        Adaptive-P2 threshold exponent t, 1 <= t <= 7, or None for a constant P2.
+    paths : sequence of str
+        A non-empty subset of :data:`PATHS`, each at most once.
+    """
+    if not _is_int(p1) or p1 < 0:
+        raise ParameterError(f"P1 must be an integer >= 0, not {p1!r}")
+    if not _is_int(p2) or p2 < p1:
+        raise ParameterError(f"P2 must be an integer >= P1 ({p1}), not {p2!r}")
+    limit = max_path_penalty(max_cost)
+    if p2 > limit:
+        raise ParameterError(
+            f"P2 must be <= {limit} for a matching cost of at most {max_cost} (path cost "
+            f"at most {int(max_cost).bit_length() + 2} bits), not {p2!r}")
+    if adapt is not None and (not _is_int(adapt) or not 1 <= adapt <= _MAX_ADAPT):
+        raise ParameterError(
+            f"adaptive P2 exponent must be an integer 1 .. {_MAX_ADAPT} (or off), not {adapt!r}")
+    paths = tuple(paths)
+    if not paths or len(set(paths)) != len(paths) or any(p not in PATH_STEPS for p in paths):
+        raise ParameterError(
+            f"SGM paths must be distinct names among {', '.join(PATHS)}, not {paths!r}")
+
+
+def widths(max_cost, p1, p2, paths=PATHS):
+    """The :class:`SgmWidths` of a configuration (validated by :func:`check_penalties`)."""
+    check_penalties(max_cost, p1, p2, paths=paths)
+    return SgmWidths(cost=int(max_cost).bit_length(),
+                     path=(max_cost + p2).bit_length(),
+                     step=int(p2).bit_length(),
+                     candidate=(max_cost + 2 * p2).bit_length(),
+                     summed=(len(tuple(paths)) * (max_cost + p2)).bit_length())
+
+
+def row_memory_bits(width, disparities, max_cost, p2, paths=PATHS):
+    """Block-RAM bits SGM needs for the previous row: (path costs, minima).
+
+    Each configured path from the row above keeps W x D path costs of bitlen(Cmax + P2)
+    bits; the second number is its W minima m of the same width, for hardware that
+    stores them instead of recomputing them.
+    """
+    bits = (max_cost + p2).bit_length()
+    rows = sum(1 for path in paths if path in ROW_PATHS)
+    return rows * width * disparities * bits, rows * width * bits
+
+
+def _dtype(max_cost, p2, n_paths):
+    """The narrowest unsigned dtype holding every intermediate and S with room to spare.
+
+    Room to spare: the right-referenced map pads with the dtype's maximum, which must be
+    larger than every real S.
+    """
+    largest = max(max_cost + 2 * p2, n_paths * (max_cost + p2)) + 1
+    for dtype in (np.uint16, np.uint32, np.uint64):
+        if largest <= np.iinfo(dtype).max:
+            return dtype
+    raise ParameterError(f"SGM costs up to {largest} do not fit 64 bits")  # pragma: no cover
+
+
+def cost_volume(left, right, params, dtype=None, threads=None):
+    """Matching costs C(x, y, d) of two gray images for SGM: (H, W, D).
+
+    The transform and matching cost are the box pipeline's (golden/transform.py,
+    golden/matching_cost.py, unchanged). One rule differs: where x - d < 0 the pair does
+    not exist and C = Cmax (the box pipeline uses 0), so that a path crossing the left
+    border is not drawn towards disparities that have no partner pixel.
+
+    Parameters
+    ----------
+    left, right : (H, W) uint8
+    params : StereoParams
+        transform, block and disparities are used.
+    dtype : numpy dtype, optional
+        Of the result; default uint16 when Cmax fits it.
+    threads : int, optional
+        Threads for the two transforms.
+    """
+    left_t, right_t = _transforms(left, right, params, threads)
+    if dtype is None:
+        dtype = np.uint16 if params.max_cost <= np.iinfo(np.uint16).max else np.uint32
+    return _band_costs(left_t, right_t, params, dtype)
+
+
+def _transforms(left, right, params, threads):
+    """The transformed left and right images (computed in parallel)."""
+    images = (np.asarray(left, np.uint8), np.asarray(right, np.uint8))
+    with ThreadPoolExecutor(max_workers=threads or 2) as pool:
+        return list(pool.map(lambda image: transform(image, params), images))
+
+
+def _band_costs(left_t, right_t, params, dtype):
+    """C of a band of transformed rows (last two axes rows, W): (rows, W, D) of ``dtype``."""
+    height, width = left_t.shape[-2:]
+    volume = np.empty((height, width, params.disparities), dtype)
+    # matching_costs wants an output of the box pipeline's cost dtype, which is wide enough
+    # for every C (it holds A*A*Cmax).
+    scratch = None
+    for d in range(params.disparities):
+        scratch = matching_costs(left_t, right_t, d, params, out=scratch)
+        volume[:, :, d] = scratch
+        volume[:, :min(d, width), d] = params.max_cost
+    return volume
+
+
+def path_p2(guide, path, p1, p2, adapt=None):
+    """Per-pixel P2 of one path: (H, W) int64.
+
+    Constant P2 when ``adapt`` is None. Otherwise, with g = |I(p) - I(p - r)| the 8-bit
+    intensity step from the predecessor along the path, s = max(0, bitlen(g) - t) and
+    P2(p) = max(P1, P2 >> s): P2 is halved for every doubling of the step beyond 2^(t-1),
+    a power-of-two version of Hirschmueller's P2 / g built from compares and a shift. At
+    pixels without a predecessor the value is unused; it is defined as P2 there.
+    """
+    guide = np.asarray(guide)
+    height, width = guide.shape
+    out = np.full((height, width), p2, dtype=np.int64)
+    if adapt is None:
+        return out
+    dx, dy = PATH_STEPS[path]
+    image = guide.astype(np.int64)
+    # Pixels with a predecessor: y + dy >= 0 and 0 <= x + dx < W.
+    ys = slice(max(0, -dy), height)
+    xs = slice(max(0, -dx), width - max(0, dx))
+    prev = image[max(0, -dy) + dy:height + dy, xs.start + dx:xs.stop + dx]
+    step = np.abs(image[ys, xs] - prev)
+    # bitlen(g) for g in 0..255 without floats: count the thresholds 2^k <= g.
+    bits = np.zeros(step.shape, dtype=np.int64)
+    for k in range(8):
+        bits += step >= (1 << k)
+    shift = np.maximum(0, bits - adapt)
+    out[ys, xs] = np.maximum(p1, p2 >> shift)
+    return out
+
+
+def _step(costs, previous, p1, p2, out, scratch):
+    """One step of the recurrence for a batch of pixels: (N, D) arrays, p2 (N, 1).
+
+    L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d-1) + P1, L(p-r, d+1) + P1, m + P2) - m
+    with m = min_k L(p-r, k); the neighbours d-1 and d+1 outside 0 .. D-1 do not exist.
+    The minimum is taken first (it is >= m), so every unsigned intermediate is exact.
+    """
+    minimum = previous.min(axis=1, keepdims=True)
+    np.copyto(scratch, previous)
+    if previous.shape[1] > 1:
+        np.minimum(scratch[:, 1:], previous[:, :-1] + p1, out=scratch[:, 1:])
+        np.minimum(scratch[:, :-1], previous[:, 1:] + p1, out=scratch[:, :-1])
+    np.minimum(scratch, minimum + p2, out=scratch)
+    scratch -= minimum
+    np.add(costs, scratch, out=out)
+
+
+def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
+    """L_r(p, d) of one path over the whole image: (H, W, D) like ``volume``.
+
+    Parameters
+    ----------
+    volume : (H, W, D) unsigned ndarray
+        Matching costs C, e.g. from :func:`cost_volume`, each <= ``max_cost``.
+    path : str
+        One of :data:`PATHS`.
+    p1, p2 : int
+        Penalties (validated against ``max_cost`` by :func:`check_penalties`).
+    guide : (H, W) uint8, optional
+        Left gray image; required when ``adapt`` is set.
+    adapt : int or None
+        Adaptive-P2 threshold exponent (see :func:`path_p2`).
+    max_cost : int, optional
+        Cmax; default the volume's maximum (the widths depend on it).
+
+    Returns
+    -------
+    ndarray
+        L_r in a dtype wide enough for every intermediate (see :func:`widths`). Pixels
+        whose predecessor lies outside the image start fresh: L_r(p, d) = C(p, d).
+    """
+    if path not in PATH_STEPS:
+        raise ParameterError(f"SGM path must be one of {', '.join(PATHS)}, not {path!r}")
+    volume = np.asarray(volume)
+    if volume.ndim != 3:
+        raise ParameterError(f"cost volume must be (H, W, D), not of shape {volume.shape}")
+    height, width, _ = volume.shape
+    largest = int(volume.max()) if volume.size else 0
+    if max_cost is None:
+        max_cost = largest
+    check_penalties(max_cost, p1, p2, adapt)
+    # The widths (and the dtype below) are derived from Cmax: a larger cost would break them.
+    if largest > max_cost:
+        raise ParameterError(f"matching costs must be <= Cmax = {max_cost}, not {largest}")
+    if adapt is not None and guide is None:
+        raise ParameterError("adaptive P2 needs the left gray image as guide")
+    if guide is not None and np.shape(guide) != (height, width):
+        raise ParameterError(f"guide image must be {width}x{height}, not of shape "
+                             f"{np.shape(guide)}")
+    dtype = _dtype(max_cost, p2, len(PATHS))
+    costs = volume.astype(dtype, copy=False)
+    p1 = dtype(p1)
+    p2_map = path_p2(guide if guide is not None else np.zeros((height, width), np.uint8),
+                     path, int(p1), p2, adapt).astype(dtype)
+    out = np.empty_like(costs)
+    dx, dy = PATH_STEPS[path]
+    if dy == 0:
+        return _left_band(costs, p1, p2_map, out)
+    return _row_band(costs, dx, p1, p2_map, None, out)
+
+
+def _left_band(costs, p1, p2_map, out):
+    """The left path over a band of rows (each row is independent): writes ``out``.
+
+    The recurrence runs along x, every row of the band at once; column-major copies make
+    each step's (rows, D) slices contiguous.
+    """
+    width = costs.shape[1]
+    costs_t = np.ascontiguousarray(costs.transpose(1, 0, 2))
+    p2_t = np.ascontiguousarray(p2_map.T)[:, :, None]
+    out_t = np.empty_like(costs_t)
+    out_t[0] = costs_t[0]  # x = 0: fresh start
+    scratch = np.empty_like(costs_t[0])
+    for x in range(1, width):
+        _step(costs_t[x], out_t[x - 1], p1, p2_t[x], out_t[x], scratch)
+    out[...] = out_t.transpose(1, 0, 2)
+    return out
+
+
+def _row_band(costs, dx, p1, p2_map, previous, out):
+    """A path from the row above (dy = -1, predecessor column x + dx) over a band of rows.
+
+    ``previous`` is L of the image row just above the band, or None when the band starts
+    at the top of the image (y = 0: fresh start). The recurrence runs along y, every
+    column of a row at once; the predecessor row is the previous output row shifted by dx.
+    """
+    rows, width = costs.shape[:2]
+    x0, x1 = max(0, -dx), width - max(0, dx)  # columns that have a predecessor
+    scratch = np.empty_like(costs[0, x0:x1])
+    for y in range(rows):
+        above = out[y - 1] if y else previous
+        if above is None:
+            out[y] = costs[y]
+            continue
+        # The column whose predecessor is outside the image starts fresh.
+        out[y, :x0] = costs[y, :x0]
+        out[y, x1:] = costs[y, x1:]
+        _step(costs[y, x0:x1], above[x0 + dx:x1 + dx], p1, p2_map[y, x0:x1, None],
+              out[y, x0:x1], scratch)
+    return out
+
+
+def aggregate(volume, p1, p2, paths=PATHS, guide=None, adapt=None, max_cost=None,
+              threads=None):
+    """S(p, d): the sum of L_r over ``paths``. (H, W, D) unsigned.
+
+    Parameters are those of :func:`path_costs`; ``threads`` computes paths in parallel
+    (numpy releases the GIL; the sum does not depend on it).
+    """
+    volume = np.asarray(volume)
+    if max_cost is None:
+        max_cost = int(volume.max()) if volume.size else 0
+    check_penalties(max_cost, p1, p2, adapt, paths)
+    workers = max(1, min(len(paths), threads or os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        parts = list(pool.map(lambda path: path_costs(volume, path, p1, p2, guide, adapt,
+                                                      max_cost), paths))
+    summed = parts[0].copy()
+    for part in parts[1:]:
+        summed += part
+    return summed
+
+
+def winners(summed):
+    """Left and right raw maps from S: argmin with ties to the lowest disparity.
+
+    dL(x, y) = argmin_d S(x, y, d); dR(xr, y) = argmin over d <= min(D-1, W-1-xr) of
+    S(xr + d, y, d), the box pipeline's definition. Returns two (H, W) int16 arrays.
+    """
+    summed = np.asarray(summed)
+    height, width, disparities = summed.shape
+    left = np.argmin(summed, axis=2).astype(np.int16)  # argmin keeps the first (lowest) d
+    # Right map: pad D columns with a value above every S, then view the padded volume
+    # with V[y, xr, d] = S[y, xr + d, d] (stride of x plus stride of d along d).
+    padded = np.full((height, width + disparities, disparities), np.iinfo(summed.dtype).max,
+                     summed.dtype)
+    padded[:, :width] = summed
+    sy, sx, sd = padded.strides
+    diagonal = np.lib.stride_tricks.as_strided(padded, (height, width, disparities),
+                                               (sy, sx, sx + sd), writeable=False)
+    right = np.argmin(diagonal, axis=2).astype(np.int16)
+    return left, right
+
+
+def disparity_from_summed(summed, lr_threshold):
+    """The final map from S: WTA, L/R check (threshold or None), columns x < D invalid."""
+    raw_left, raw_right = winners(summed)
+    return _checked(raw_left, raw_right, summed.shape[2], lr_threshold)
+
+
+def _checked(raw_left, raw_right, disparities, lr_threshold):
+    """DisparityResult of the raw maps: L/R check (threshold or None), x < D invalid."""
+    checked = raw_left if lr_threshold is None else lr_check(raw_left, raw_right, lr_threshold)
+    checked = checked.astype(np.int16, copy=True)
+    checked[:, :disparities] = INVALID
+    return DisparityResult(checked, raw_left, raw_right)
+
+
+def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=None):
+    """Disparity map of the SGM pipeline, INVALID (-1) where none is reported.
+
+    Parameters
+    ----------
+    left, right : (H, W) uint8
+        Rectified gray images; the left one is the reference.
+    params : StereoParams
+        transform, block, disparities and lr_threshold are used. ``aggregation`` is
+        ignored (SGM replaces the box) and ``rounds`` does not change the result (ties go
+        to the lowest disparity whatever the partitioning, as in the box pipeline).
+    p1, p2 : int
+        Penalties, 0 <= P1 <= P2 <= ``max_path_penalty(params.max_cost)``.
+    paths : sequence of str
+        Subset of :data:`PATHS` to sum.
+    adapt : int or None
+        Adaptive-P2 threshold exponent t (1 .. 7), None for a constant P2.
+    threads : int, optional
+        Worker threads (paths run in parallel).
+
+    Returns
+    -------
+    DisparityResult
+        ``disparity`` after the check and the border rule, ``left``/``right`` raw maps.
+    """
+    if not isinstance(params, StereoParams):
+        raise ParameterError("params must be a StereoParams")
+    left, right = np.asarray(left), np.asarray(right)
+    for name, image in (("left", left), ("right", right)):
+        if image.ndim != 2 or image.dtype != np.uint8:
+            raise ParameterError(
+                f"{name} image must be 8-bit gray (2-D uint8), not {image.dtype} {image.shape}")
+    if left.shape != right.shape:
+        raise ParameterError("left and right images must have the same size")
+    check_penalties(params.max_cost, p1, p2, adapt, paths)
+    paths = tuple(paths)
+    height, width = left.shape
+    dtype = _dtype(params.max_cost, p2, len(PATHS))
+    left_t, right_t = _transforms(left, right, params, threads)
+    p2_maps = {path: path_p2(left, path, p1, p2, adapt).astype(dtype) for path in paths}
+    p1 = dtype(p1)
+    # Bands of rows bound the memory (a few band volumes instead of several image volumes);
+    # the paths from above carry their last row from one band into the next, the left
+    # path and the winners work row by row anyway, so bands change no bit of the result.
+    rows = max(1, _BAND_ELEMENTS // (width * params.disparities))
+    previous = {path: None for path in paths if path != "left"}
+    raw_left, raw_right = [], []
+    workers = max(1, min(len(paths), threads or os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for y0 in range(0, height, rows):
+            y1 = min(height, y0 + rows)
+            costs = _band_costs(left_t[..., y0:y1, :], right_t[..., y0:y1, :], params, dtype)
+
+            def one_path(path):
+                out = np.empty_like(costs)
+                if path == "left":
+                    return _left_band(costs, p1, p2_maps[path][y0:y1], out)
+                return _row_band(costs, PATH_STEPS[path][0], p1, p2_maps[path][y0:y1],
+                                 previous[path], out)
+
+            parts = list(pool.map(one_path, paths))
+            for path, part in zip(paths, parts):
+                if path != "left":
+                    previous[path] = part[-1].copy()
+            summed = parts[0]
+            for part in parts[1:]:
+                summed += part
+            band_left, band_right = winners(summed)
+            raw_left.append(band_left)
+            raw_right.append(band_right)
+    return _checked(np.concatenate(raw_left), np.concatenate(raw_right), params.disparities,
+                    params.lr_threshold)
