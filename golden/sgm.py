@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..params import ParameterError, StereoParams
 from .lr_check import INVALID, lr_check
 from .matching_cost import matching_costs
-from .params import ParameterError, StereoParams
 from .pipeline import DisparityResult
 from .transform import transform
 

@@ -50,10 +50,10 @@ from npstereo.golden import sgm
 from npstereo.golden.data import StereoPair, load_middlebury, read_image
 from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.lr_check import INVALID, lr_check
-from npstereo.golden.params import StereoParams, UserError
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
+from npstereo.params import StereoParams, UserError
 
 #: L/R threshold of the project's default configuration (docs/semantics.md).
 LR_THRESHOLD = 3

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from npstereo.golden import sgm
-from npstereo.golden.params import TRANSFORMS, ParameterError, StereoParams
+from npstereo.params import TRANSFORMS, ParameterError, StereoParams
 
 import reference
 

@@ -36,7 +36,7 @@ import numpy as np
 from npstereo.golden import sgm
 from npstereo.golden.data import load_middlebury, read_image
 from npstereo.golden.degrade import gaussian_noise_pair
-from npstereo.golden.params import StereoParams
+from npstereo.params import StereoParams
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
 
