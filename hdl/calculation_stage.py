@@ -2,30 +2,39 @@
 
 Hardware counterpart of :mod:`npstereo.golden.transform`, :mod:`~npstereo.golden.matching_cost`,
 :mod:`~npstereo.golden.aggregation` and :func:`npstereo.golden.wta.wta_partition`, in that
-order. Each position takes R clocks (rounds); round j evaluates disparities
-j*D/R .. (j+1)*D/R - 1 on the same D/R matching-cost units.
+order. A position takes a slot of R clocks (rounds); D/R cost units work in every round.
 
-- One left and one right :class:`~.transform.Transform` per position.
-- The right transforms of the last D positions sit in a ring of registers. Between rounds
-  the ring rotates by D/R, so cost unit i always reads ring slot i (no R:1 multiplexers);
-  the last round rotates by D/R - 1 and inserts the new right transform.
-- Costs are 0 where x - d < 0 or the position lies outside the frame.
-- Vertical aggregation keeps the previous A-1 rows' costs of every (column, round) in a
-  :class:`~amaranth.lib.memory.Memory` (read-modify-write); horizontal aggregation adds
-  the sums of the A-1 previous positions from delay lines of R clocks each. Rows and
-  columns outside the frame are masked from the tags, not from memory contents.
-- WTA per partition: :class:`~.trees.MinTree`, ties to the lowest disparity.
+**Cost unit i holds the disparities i*R .. i*R + R - 1** and evaluates i*R + j in round j
+(a strided partition per round, see :mod:`npstereo.golden.wta`). Over a position it needs
+the right-image transforms of the R consecutive columns x - i*R - j, and at the next
+position the same columns shifted by one: one column enters, from unit i - 1, and the
+oldest leaves, to unit i + 1. So each unit keeps its R right transforms in a store of R
+words (LUT RAM, written once per position, read once per round) and hands its oldest word
+to the next unit by a direct wire from its read port to the next store's write port. No
+multiplexer chooses among the D transforms and no wire is longer than one unit: this
+replaces the ring of D registers rotating through wide multiplexers, whose wiring kept
+census 9x9 from routing and whose flip-flops made the extended census too big.
+
+For the vertical aggregation the stage either computes the costs of the A rows of the window
+(``params.stored_rows == "transforms"``: the transforms of the A-1 rows above come from a
+block RAM of transformed pixels, one word per column, and travel through the stores with
+the current row's) or hands single-row costs to :class:`~.aggregation.Aggregation`, which
+keeps the costs of the rows above (``"costs"``).
+
+The datapath never stalls (no clock enable): each value carries the tag of its slot, and
+only the stores are written, only in slots that carry a position.
 """
 
-from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import bits_for, delay, tag_layout
+from .aggregation import Aggregation, vertical_bits
+from .common import SlotClock, bits_for, pipe, tag_layout
 from .matching_cost import MatchingCost
 from .transform import Transform
-from .trees import DEFAULT_EVERY, MinTree
+from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
 
 __all__ = ["CalculationStage"]
 
@@ -37,183 +46,207 @@ class CalculationStage(wiring.Component):
     ----------
     params : StereoParams
     every : int
-        Register spacing of the transform, cost and minimum trees (see :mod:`.trees`).
+        Register spacing of the transform, cost and adder/minimum trees (see :mod:`.trees`).
 
     Attributes
     ----------
     window_left, window_right : In(ArrayLayout(unsigned(8), B * B))
-        From the input stage; change only with a position-advancing ``en``.
-    tag_in : In(tag_layout)
+        From the input stage, slot-aligned at this stage's input.
+    tag : In(tag_layout)
         Centre of those windows.
-    en : In(1)
-        One clock of the pipeline (one round).
-    round : In(range(R))
-        Round of this clock; the input stage advances on ``en`` in round R-1.
-    costs : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
-        S(x, y, round * D/R + i) for unit i.
+    first, round : In
+        Slot timing at the input.
+    sums : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
+        S(centre, i*R + round) of unit i, at offset ``sums_latency``.
+    centre : Out(tag_layout)
+        The aggregation centre of ``sums``, slot-aligned at ``sums_latency``.
     best_cost, best_disparity : Out
-        The partition's winner.
-    tag : Out(tag_layout)
-        Position (centre of the aggregation window) and round of the outputs.
-    latency : (int, int)
-        ``(position_latency, round_latency)``: whole positions from the window to the
-        cost units' inputs, then clocks to the outputs of the same round.
+        The partition winner of the round, at offset ``latency``.
+    sums_latency, latency : int
+        Clocks from the input to ``sums`` and to the partition winner.
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
         self.params, self.every = params, every
         self.transform_left = Transform(params, every)
         self.transform_right = Transform(params, every)
-        self.cost_units = [MatchingCost(params, every) for _ in range(params.per_round)]
-        self.min_tree = MinTree(params.per_round, params.aggregated_cost_bits, every)
-        a, rounds = params.agg_radius, params.rounds
-        #: Positions from the window to the position register (transform, then the register).
-        self.position_latency = self.transform_left.latency + 1
-        #: Clocks from the position register to the outputs of the same round: costs,
-        #: vertical (memory read), horizontal (a positions and a register), minimum tree.
-        self.round_latency = (self.cost_units[0].latency + (4 if a else 0)
-                              + (a * rounds + 1 if a else 0) + self.min_tree.latency)
-        #: The output tag is the centre of the aggregation window, a rows and a columns
-        #: behind the newest costs.
-        self.latency = (self.position_latency, self.round_latency)
+        a = params.agg_radius
+        #: Rows whose costs the cost units compute: A with stored transforms, else 1.
+        self.rows = params.aggregation if a and params.stored_rows == "transforms" else 1
+        self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
+                           for _ in range(params.per_round)]
+        self.aggregation = Aggregation(params, every)
+        transform_latency = self.transform_left.latency
+        # Offsets (clocks after the input) of the datapath's steps; see elaborate().
+        self.transformed = max(transform_latency, 2) if self.rows > 1 else transform_latency
+        self.stored = self.transformed + 1
+        cost_latency = self.cost_units[0][0].latency
+        self.costed = max(self.stored + 1 + cost_latency, self.stored + 3)
+        self.vertical = self.costed + (sum(register_plan(self.rows, every, 0, True))
+                                       if self.rows > 1 else 1)
+        self.sums_latency = self.vertical + self.aggregation.latency
+        self.min_latency = sum(register_plan(params.per_round, every))
+        self.latency = self.sums_latency + self.min_latency + 1
+        units = params.per_round
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
         super().__init__({
             "window_left": In(window), "window_right": In(window),
-            "tag_in": In(tag_layout(params)),
-            "en": In(1),
-            "round": In(bits_for(rounds - 1)),
-            "costs": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits),
-                                          params.per_round)),
+            "tag": In(tag_layout(params)),
+            "first": In(1), "round": In(range(params.rounds)),
+            "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
+            "centre": Out(tag_layout(params)),
             "best_cost": Out(params.aggregated_cost_bits),
             "best_disparity": Out(bits_for(params.disparities - 1)),
-            "tag": Out(tag_layout(params)),
         })
 
     def elaborate(self, platform):
         p = self.params
         m = Module()
-        rounds, per_round, depth = p.rounds, p.per_round, p.disparities
-        advance = self.en & (self.round == rounds - 1)
+        slots = SlotClock(m, self.first, self.round, p.rounds, "calculation")
 
-        # Transforms advance once per position.
         m.submodules.transform_left = tl = self.transform_left
         m.submodules.transform_right = tr = self.transform_right
         m.d.comb += [tl.window.eq(self.window_left), tr.window.eq(self.window_right),
-                     tl.en.eq(advance), tr.en.eq(advance)]
-        transformed_tag = delay(m, advance, self.tag_in, tl.latency, "transform_tag")
+                     tl.en.eq(1), tr.en.eq(1)]
+        left, right = self._transformed_rows(m, slots, tl.value, tr.value)
+        tag = slots.delay(self.tag, 0, self.transformed, "transformed_tag")
+        right_words = self._right_stores(m, slots, Cat(*right), tag)
+        # The left word reaches the cost units with the stores' read registers.
+        left_word = pipe(m, Cat(*left), 2, "left_word")
+        tag = slots.delay(tag, self.transformed, self.stored + 1 - self.transformed, "cost_tag")
+        costs = self._costs(m, slots, left_word, right_words, tag)
 
-        # Position register and right-transform ring (slot k = TR of the position k back).
-        left = Signal(p.transform_bits)
-        ring = [Signal(p.transform_bits, name=f"ring{k}") for k in range(depth)]
-        position = Signal(tag_layout(p))
-        with m.If(advance):
-            m.d.sync += [left.eq(tl.value), position.eq(transformed_tag),
-                         ring[0].eq(tr.value)]
-            m.d.sync += [ring[k].eq(ring[(k + per_round - 1) % depth])
-                         for k in range(1, depth)]
-        with m.Elif(self.en):
-            m.d.sync += [ring[k].eq(ring[(k + per_round) % depth]) for k in range(depth)]
-        round_tag = Signal(tag_layout(p))
-        m.d.comb += [round_tag.eq(position), round_tag.round.eq(self.round)]
+        m.submodules.aggregation = aggregation = self.aggregation
+        newest = slots.delay(tag, self.stored + 1, self.vertical - self.stored - 1,
+                             "aggregation_tag")
+        m.d.comb += [aggregation.tag.eq(newest), aggregation.first.eq(slots.first(self.vertical)),
+                     aggregation.round.eq(slots.round(self.vertical))]
+        m.d.comb += [aggregation.costs[i].eq(c) for i, c in enumerate(costs)]
+        m.d.comb += [self.sums.eq(aggregation.sums), self.centre.eq(aggregation.centre)]
 
-        # Matching costs of the round's disparities.
-        costs = []
-        for i, unit in enumerate(self.cost_units):
-            m.submodules[f"cost{i}"] = unit
-            m.d.comb += [unit.left.eq(left), unit.right.eq(ring[i]), unit.en.eq(self.en)]
-        cost_tag = delay(m, self.en, round_tag, self.cost_units[0].latency, "cost_tag")
-        inside = (cost_tag.live & (cost_tag.y >= 0) & (cost_tag.y < p.height))
-        for i, unit in enumerate(self.cost_units):
-            disparity = cost_tag.round * per_round + i
-            costs.append(Mux(inside & (cost_tag.x >= disparity), unit.cost, 0))
-
-        vertical, vertical_tag = self._vertical(m, costs, cost_tag)
-        summed, summed_tag = self._horizontal(m, vertical, vertical_tag)
-
-        # WTA of the partition; costs and tag wait for the tree.
-        m.submodules.min_tree = tree = self.min_tree
-        m.d.comb += [tree.en.eq(self.en)] + [tree.values[i].eq(summed[i])
-                                             for i in range(per_round)]
-        out_tag = delay(m, self.en, summed_tag, tree.latency, "wta_tag")
-        out_costs = delay(m, self.en, Cat(*summed), tree.latency, "wta_costs")
-        bits = p.aggregated_cost_bits
-        m.d.comb += [
-            self.tag.eq(out_tag),
-            self.best_cost.eq(tree.min),
-            self.best_disparity.eq(out_tag.round * per_round + tree.index),
-        ]
-        m.d.comb += [self.costs[i].eq(out_costs[bits * i:bits * (i + 1)])
-                     for i in range(per_round)]
+        # WTA of the partition: unit i's leaf carries its first disparity i*R, to which the
+        # round is added at the root (ties keep the lowest unit, i.e. the lowest disparity).
+        d_shape = unsigned(bits_for(p.disparities - 1))
+        leaves = [(aggregation.sums[i], Const(i * p.rounds, d_shape))
+                  for i in range(p.per_round)]
+        plan = register_plan(p.per_round, self.every)
+        best_cost, best_base = build_tree(m, 1, leaves, select_min, plan)
+        round_ = slots.round(self.sums_latency + self.min_latency)
+        m.d.sync += [self.best_cost.eq(best_cost), self.best_disparity.eq(best_base + round_)]
         return m
 
-    def _vertical(self, m, costs, tag):
-        """Column sums over rows y - 2a .. y, reported for the centre row y - a."""
+    def _transformed_rows(self, m, slots, left, right):
+        """The transforms of the rows of the aggregation window, slot-aligned at
+        ``self.transformed``: the current row (from the transform units), then the rows
+        above (from a block RAM of transformed pixels, when the rows are recomputed)."""
         p = self.params
-        a = p.agg_radius
-        if a == 0:
-            return costs, tag
-        rows, bits, per_round = 2 * a, p.cost_bits, p.per_round
-        m.submodules.cost_lines = lines = Memory(
-            shape=unsigned(rows * per_round * bits), depth=p.width * p.rounds, init=[])
-        rd = lines.read_port(domain="sync")
-        wr = lines.write_port()
-        # Four registers, for the clock: the address (it fans out to every block RAM of
-        # the buffer), the block RAM's read register, its data again (the RAM's
-        # clock-to-output alone is a third of a cycle), and the column sums, so that
-        # neither the RAM nor the adders reach into the horizontal sum. The write-back
-        # lands two clocks after the read; the same address is read again only a row
-        # (W * R clocks > 2) later, so no read can see a stale word.
-        address = delay(m, self.en, tag.x * p.rounds + tag.round, 1, "cost_lines_address")
-        m.d.comb += [rd.addr.eq(address), rd.en.eq(self.en)]
-        read = delay(m, self.en, rd.data, 1, "cost_lines_data")
-        held = [delay(m, self.en, c, 3, f"vertical_in{i}") for i, c in enumerate(costs)]
-        held_tag = delay(m, self.en, tag, 3, "vertical_tag")
+        delay = self.transformed - self.transform_left.latency
+        left, right = (pipe(m, left, delay, "left_current"),
+                       pipe(m, right, delay, "right_current"))
+        if self.rows == 1:
+            return [left], [right]
+        above, bits = self.rows - 1, p.transform_bits
+        m.submodules.transform_lines = lines = Memory(
+            shape=unsigned(2 * above * bits), depth=p.width, init=[],
+            attrs={"no_rw_check": 1})
+        read, write = lines.read_port(domain="sync"), lines.write_port()
+        # Read the position's column in round 0 of slots with a position (the word then
+        # stays on the read port); two clocks later the word has left the block RAM and the plain
+        # register behind it (the RAM's own output register on ECP5). The write-back of a
+        # column comes `transformed` clocks after its read, and the column is read again a
+        # row later: no collision logic (no_rw_check).
+        m.d.comb += [read.addr.eq(self.tag.x), read.en.eq(slots.first(0) & self.tag.valid)]
+        word = pipe(m, read.data, 1, "transform_lines_read")
+        word = pipe(m, word, self.transformed - 2, "transform_lines_word")
+        left_above = [word[k * bits:(k + 1) * bits] for k in range(above)]
+        right_above = [word[(above + k) * bits:(above + k + 1) * bits] for k in range(above)]
+        tag = slots.delay(self.tag, 0, self.transformed, "transform_lines_tag")
+        m.d.comb += [write.addr.eq(tag.x), write.en.eq(slots.first(self.transformed) & tag.valid),
+                     write.data.eq(Cat(left, *left_above[:above - 1],
+                                       right, *right_above[:above - 1]))]
+        return [left, *left_above], [right, *right_above]
 
-        def stored(row, i):  # row 0 = the row above held_tag.y
-            start = (row * per_round + i) * bits
-            return read[start:start + bits]
+    def _right_stores(self, m, slots, newest, tag):
+        """Each unit's R right-image words; returns the units' read registers.
 
-        sums = []
-        for i in range(per_round):
-            total = held[i]
-            for row in range(rows):
-                total = total + Mux(held_tag.y - 1 - row >= 0, stored(row, i), 0)
-            sums.append(total)
-        m.d.comb += [
-            wr.addr.eq(delay(m, self.en, address, 2, "cost_lines_write_address")),
-            wr.en.eq(self.en),
-            wr.data.eq(Cat(*held, *[stored(row, i) for row in range(rows - 1)
-                                    for i in range(per_round)])),
-        ]
-        registered = [Signal(len(total), name=f"vertical{i}") for i, total in enumerate(sums)]
-        out_tag = Signal(tag_layout(p))
-        with m.If(self.en):
-            m.d.sync += [r.eq(total) for r, total in zip(registered, sums)]
-            m.d.sync += [out_tag.eq(held_tag), out_tag.y.eq(held_tag.y - a)]
-        sums = registered
-        return sums, out_tag
-
-    def _horizontal(self, m, vertical, tag):
-        """Row sums over the positions x - 2a .. x, reported (registered) for x - a."""
+        Unit i reads, in round j, the word of column x - i*R - j (a register later it is
+        the unit's operand). The newest word enters unit 0 in the clock before round 0;
+        in the same clock (the end of round R-1 of the previous slot) every other unit
+        takes the word its predecessor is reading, the oldest one there, which is the
+        newest one here. ``tag`` is slot-aligned at ``self.transformed``, the clock of
+        the writes.
+        """
         p = self.params
-        a, rounds = p.agg_radius, p.rounds
-        if a == 0:
-            return vertical, tag
-        taps = [Cat(*vertical)]
-        for k in range(1, 2 * a + 1):
-            taps.append(delay(m, self.en, taps[-1], rounds, f"row_tap{k}"))
-        centre = delay(m, self.en, tag, a * rounds, "row_centre")
-        bits = len(vertical[0])
-        sums = [Signal(p.aggregated_cost_bits, name=f"aggregated{i}")
-                for i in range(p.per_round)]
-        out_tag = Signal(tag_layout(p))
-        terms = [[] for _ in range(p.per_round)]
-        for k, tap in enumerate(taps):
-            offset = a - k  # tap k holds the column x_centre + offset
-            inside = (centre.x >= -offset) if offset < 0 else (centre.x <= p.width - 1 - offset)
-            for i in range(p.per_round):
-                terms[i].append(Mux(inside, tap[bits * i:bits * (i + 1)], 0))
-        with m.If(self.en):
-            m.d.sync += [s.eq(sum(t)) for s, t in zip(sums, terms)]
-            m.d.sync += out_tag.eq(centre)
-        return sums, out_tag
+        rounds, bits = p.rounds, len(newest)
+        at = self.transformed
+        entering = slots.first(at) & tag.valid                 # unit 0 takes a new word
+        leaving_tag = slots.delay(tag, at, 1, "store_tag")     # the slot in rounds now
+        passing = slots.first(at) & leaving_tag.valid          # the others take one
+
+        def pointers(write, name):
+            """Write pointer and read pointer (newest word, then one older per round)."""
+            if rounds == 1:
+                return Const(0), Const(0)
+            written = Signal(range(rounds), name=f"{name}_write")
+            reading = Signal(range(rounds), name=f"{name}_read")
+            newest_word = Mux(write, written, Mux(written == 0, rounds - 1, written - 1))
+            with m.If(slots.first(at)):
+                m.d.sync += reading.eq(newest_word)
+                with m.If(write):
+                    m.d.sync += written.eq(Mux(written == rounds - 1, 0, written + 1))
+            with m.Else():
+                m.d.sync += reading.eq(Mux(reading == 0, rounds - 1, reading - 1))
+            return written, reading
+
+        first_pointers = pointers(entering, "store0")
+        other_pointers = pointers(passing, "stores")
+        operands, previous = [], None
+        for i in range(p.per_round):
+            m.submodules[f"right_store{i}"] = store = Memory(
+                shape=unsigned(bits), depth=rounds, init=[])
+            read, write = store.read_port(domain="comb"), store.write_port()
+            written, reading = first_pointers if i == 0 else other_pointers
+            m.d.comb += [read.addr.eq(reading), write.addr.eq(written),
+                         write.en.eq(entering if i == 0 else passing),
+                         write.data.eq(newest if i == 0 else previous.data)]
+            operands.append(pipe(m, read.data, 1, f"right_operand{i}"))
+            previous = read
+        return operands
+
+    def _costs(self, m, slots, left_word, right_words, tag):
+        """Masked costs (or vertical sums of A rows) per unit, at offset ``self.vertical``.
+
+        ``tag`` is slot-aligned at ``self.stored + 1``, where the operands are. A cost is 0
+        where x - d < 0, where its row lies outside the frame, and in slots without a
+        position.
+        """
+        p = self.params
+        start = self.stored + 1
+        bits = p.transform_bits
+        # x - j once, then one constant comparison per unit: x - d >= 0 <=> x - j >= i*R.
+        x_minus_round = Signal(range(-p.rounds, p.width), name="x_minus_round")
+        m.d.sync += x_minus_round.eq(tag.x - slots.round(start))
+        rows_ok = []
+        for k in range(self.rows):
+            ok = Signal(name=f"cost_row_ok{k}")
+            m.d.sync += ok.eq(tag.valid & tag.live & (tag.y >= k) & (tag.y < p.height + k))
+            rows_ok.append(pipe(m, ok, self.costed - start - 1, f"cost_row_ok{k}"))
+        masked = []
+        for i, units in enumerate(self.cost_units):
+            in_row = Signal(name=f"in_row{i}")
+            m.d.sync += in_row.eq(x_minus_round >= i * p.rounds)
+            in_row = pipe(m, in_row, self.costed - start - 2, f"in_row{i}")
+            row_costs = []
+            for k, unit in enumerate(units):
+                m.submodules[f"cost{i}_row{k}"] = unit
+                m.d.comb += [unit.left.eq(left_word[k * bits:(k + 1) * bits]),
+                             unit.right.eq(right_words[i][k * bits:(k + 1) * bits]),
+                             unit.en.eq(1)]
+                cost = pipe(m, unit.cost, self.costed - start - unit.latency, f"cost{i}_{k}")
+                row_costs.append(Mux(in_row & rows_ok[k], cost, 0))
+            if self.rows > 1:
+                total = build_sum(m, 1, row_costs, self.every, 0, True)
+                masked.append(total[:vertical_bits(p)])
+            else:
+                masked.append(pipe(m, row_costs[0], 1, f"masked_cost{i}"))
+        return masked

@@ -1,16 +1,24 @@
-"""Pieces shared by the pipeline stages: the position tag and enable-gated delay lines.
+"""Pieces shared by the pipeline stages: position tags, slot timing and free-running delays.
 
-Every stage carries, next to its data, the *tag* of the position the data belongs to
-(centre column ``x``, row ``y``, calculation ``round`` and ``live``). Stages derive every
-border mask from the tag instead of relying on what their registers or memories held
-before, so stale contents (previous frame, reset in mid-frame, dummy flush positions)
-can never leak into a result.
+The core never stalls: every register of the datapath loads every clock. Time is cut into
+*slots* of R clocks (round 0 .. R-1); a slot either carries a *position* (a pixel, or a
+dummy position while a frame is completed or flushed) or is a bubble. Every stage carries,
+next to its data, the *tag* of the slot its data belongs to (centre column ``x``, row ``y``,
+``valid``: the slot carries a position, ``live``: the tag names a real position since
+reset). Stages derive every border mask from the tag, never
+from what their registers or memories held before, so stale contents (previous frame,
+reset in mid-frame, flush positions, bubbles) never reach a result. Only state that
+belongs to positions (line buffers, stores of earlier positions) is written, and only in
+slots whose tag is ``valid``: bubbles leave it untouched.
+
+A value that belongs to a slot (a tag, a transformed pixel) is *slot-aligned at offset o*:
+it holds the slot's value during the R clocks from o clocks after the slot's first clock.
 """
 
-from amaranth.hdl import Signal, signed, unsigned
+from amaranth.hdl import Const, Mux, Signal, signed, unsigned
 from amaranth.lib import data
 
-__all__ = ["bits_for", "tag_layout", "delay", "y_range"]
+__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "SlotClock"]
 
 
 def bits_for(maximum):
@@ -26,28 +34,99 @@ def y_range(params):
     few rows below the frame, where no stage needs them any more.
     """
     r, a, width = params.radius, params.agg_radius, params.width
-    lowest = -(r * width + r) // width - a
+    lowest = -(r * width + r) // width - a - 1
     highest = params.height + a + 1
     return lowest, highest
 
 
 def tag_layout(params):
-    """Layout of a position tag; ``live`` is 0 for positions never produced since reset."""
+    """Layout of a slot's tag."""
     lowest, highest = y_range(params)
     y_bits = max(abs(lowest), highest).bit_length() + 1
     return data.StructLayout({
         "x": unsigned(bits_for(params.width - 1)),
         "y": signed(y_bits),
-        "round": unsigned(bits_for(params.rounds - 1)),
+        "valid": unsigned(1),
         "live": unsigned(1),
     })
 
 
-def delay(m, en, value, steps, name):
-    """``value`` delayed by ``steps`` ``en``-high clocks (a shift register; 0 steps: itself)."""
+def pipe(m, value, steps, name):
+    """``value`` delayed by ``steps`` clocks: a free-running shift register without reset.
+
+    Datapath registers have no reset: nothing downstream trusts their contents without a
+    valid tag, and a reset net reaching every one of them would only cost routing.
+    """
     for step in range(steps):
-        reg = Signal(value.shape(), name=f"{name}_d{step}")
-        with m.If(en):
-            m.d.sync += reg.eq(value)
+        reg = Signal(value.shape(), name=f"{name}_p{step}", reset_less=True)
+        m.d.sync += reg.eq(value)
         value = reg
     return value
+
+
+class SlotClock:
+    """Slot timing inside one component: where round 0 of a slot falls, offset by offset.
+
+    Parameters
+    ----------
+    m : Module
+    first : Value
+        1 in the first clock (round 0) of every slot, at the component's input offset.
+    round_ : Value
+        The round at the component's input offset.
+    rounds : int
+        R, the slot length in clocks.
+    name : str
+        Prefix of the registers it creates.
+
+    The pulse is delayed by one shared shift register whose taps are handed out, so any
+    number of users at any offsets cost max(offset) flip-flops in all.
+    """
+
+    def __init__(self, m, first, round_, rounds, name):
+        self.m, self.rounds, self.name = m, rounds, name
+        self._taps = [first]
+        self._rounds = {0: round_}
+
+    def first(self, offset):
+        """1 in round 0 of every slot, ``offset`` clocks after the input offset."""
+        if self.rounds == 1:
+            return Const(1)
+        while len(self._taps) <= offset:
+            tap = Signal(name=f"{self.name}_first{len(self._taps)}")
+            self.m.d.sync += tap.eq(self._taps[-1])
+            self._taps.append(tap)
+        return self._taps[offset]
+
+    def round(self, offset):
+        """The round (0 .. R-1) ``offset`` clocks after the input offset.
+
+        A local counter, cleared by the slot-start pulse a clock ahead, rather than the
+        input's round carried along: a few flip-flops, and no long wires between stages.
+        """
+        if self.rounds == 1:
+            return Const(0)
+        if offset not in self._rounds:
+            counter = Signal(range(self.rounds), name=f"{self.name}_round{offset}")
+            wrap = (counter == self.rounds - 1) | self.first(offset - 1)
+            self.m.d.sync += counter.eq(Mux(wrap, 0, counter + 1))
+            self._rounds[offset] = counter
+        return self._rounds[offset]
+
+    def delay(self, value, start, steps, name, reset_less=False):
+        """A value slot-aligned at ``start`` moved ``steps`` clocks later.
+
+        A latch loaded in clock k of a slot (0 <= k < R) holds the slot's value from
+        clock k + 1 to k + R: one register moves a value by up to R clocks, so the delay
+        costs ceil(steps / R) registers, not ``steps`` (the value is constant for R
+        clocks). Tags keep their reset (their valid bits must clear); data need not.
+        """
+        done = 0
+        while done < steps:
+            jump = min(self.rounds, steps - done)
+            reg = Signal(value.shape(), name=f"{name}_s{start + done + jump}",
+                         reset_less=reset_less)
+            with self.m.If(self.first(start + done + jump - 1)):
+                self.m.d.sync += reg.eq(value)
+            value, done = reg, done + jump
+        return value

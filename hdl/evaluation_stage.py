@@ -1,21 +1,24 @@
 """Evaluation stage: WTA across the R partition results of a position.
 
 Hardware counterpart of :func:`npstereo.golden.wta.evaluate_partitions`: the partitions
-arrive in increasing order, one per round, and a running winner keeps the earlier one on a
-tie (strict ``<``), so the result is the global argmin with ties to the lowest disparity.
+arrive one per round; a running winner takes a later partition's (cost, disparity) only if
+the pair is smaller, compared as one number with the cost in the high bits, so equal costs
+keep the lower disparity whichever round it came from (the partitions are strided, see
+:mod:`npstereo.golden.wta`). The result is the global argmin with ties to the lowest
+disparity.
 """
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .common import bits_for, tag_layout
+from .common import SlotClock, bits_for, tag_layout
 
 __all__ = ["EvaluationStage"]
 
 
 def _better(candidate, best):
-    """A later partition replaces the running winner only if strictly better."""
+    """A partition's (cost, disparity) replaces the running winner only if smaller."""
     return candidate < best
 
 
@@ -24,40 +27,43 @@ class EvaluationStage(wiring.Component):
 
     Attributes
     ----------
-    en : In(1)
     cost, disparity : In
-        The partition winner of ``tag.round``.
+        The partition winner of the round, one per clock.
+    first, round : In
+        Slot timing at the input.
     tag : In(tag_layout)
+        The position, slot-aligned at the input.
     disparity_out : Out
-        Winner over rounds 0 .. tag.round; final when ``done``.
-    done : Out(1)
-        This clock carries the last round (combinational from ``tag``).
+        The winner over all rounds, slot-aligned at ``latency``.
+    tag_out : Out(tag_layout)
+        ``tag`` at ``latency``.
     latency : int
-        0: the final winner is available in the clock of the last round.
+        R: the winner is latched in the last round's clock.
     """
-
-    latency = 0
 
     def __init__(self, params):
         self.params = params
+        self.latency = params.rounds
         super().__init__({
-            "en": In(1),
             "cost": In(params.aggregated_cost_bits),
             "disparity": In(bits_for(params.disparities - 1)),
+            "first": In(1), "round": In(range(params.rounds)),
             "tag": In(tag_layout(params)),
             "disparity_out": Out(bits_for(params.disparities - 1)),
-            "done": Out(1),
+            "tag_out": Out(tag_layout(params)),
         })
 
     def elaborate(self, platform):
+        p = self.params
         m = Module()
-        best_cost = Signal.like(self.cost)
-        best_disparity = Signal.like(self.disparity)
-        take = (self.tag.round == 0) | _better(self.cost, best_cost)
-        cost = Mux(take, self.cost, best_cost)
-        disparity = Mux(take, self.disparity, best_disparity)
-        with m.If(self.en):
-            m.d.sync += [best_cost.eq(cost), best_disparity.eq(disparity)]
-        m.d.comb += [self.disparity_out.eq(disparity),
-                     self.done.eq(self.tag.round == self.params.rounds - 1)]
+        slots = SlotClock(m, self.first, self.round, p.rounds, "evaluation")
+        candidate = Cat(self.disparity, self.cost)
+        best = Signal.like(candidate, name="best", reset_less=True)
+        running = Mux(slots.first(0) | _better(candidate, best), candidate, best)
+        m.d.sync += best.eq(running)
+        final = Signal.like(self.disparity, name="final", reset_less=True)
+        with m.If(slots.first(p.rounds - 1) if p.rounds > 1 else 1):
+            m.d.sync += final.eq(running[:len(self.disparity)])
+        m.d.comb += [self.disparity_out.eq(final),
+                     self.tag_out.eq(slots.delay(self.tag, 0, p.rounds, "evaluated_tag"))]
         return m

@@ -2,12 +2,18 @@
 
 Hardware counterpart of the golden model's zero-padded windows
 (:func:`npstereo.golden.transform.neighbour_planes`). Pixels arrive in raster order, one
-*position* per ``advance``. One :class:`~amaranth.lib.memory.Memory` per image (depth W,
+per admitted slot (``admit``). One :class:`~amaranth.lib.memory.Memory` per image (depth W,
 B-1 pixels wide) holds the previous B-1 rows of every column, so each position yields a
 raster-continuous column of B pixels; a shift register of B columns forms the window.
 The window centre trails the newest pixel by r rows and r columns; a mask computed from the
 centre's counters clears every window pixel outside the frame (zero padding without extra
 cycles at line ends).
+
+Frames may follow each other without a flush: when a frame starts right after the previous
+one (``overlap``), the centre keeps the previous frame's coordinates until it reaches the
+new frame's first pixel, r rows and r columns later, so the previous frame's last rows are
+still computed (their window rows below the frame are masked, whatever pixels the new frame
+put there).
 """
 
 from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
@@ -15,13 +21,17 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import tag_layout, y_range
+from .common import SlotClock, pipe, tag_layout, y_range
 
 __all__ = ["InputStage"]
 
+#: Clocks from the admission of a pixel to its column in the window: the line buffer's
+#: read (block RAM), its output register, and the window's shift.
+LATENCY = 3
+
 
 class InputStage(wiring.Component):
-    """Windows of both images around one centre per ``advance``.
+    """Windows of both images around one centre per admitted slot.
 
     Parameters
     ----------
@@ -30,62 +40,137 @@ class InputStage(wiring.Component):
 
     Attributes
     ----------
-    left, right : In(8)
-        The pixel entering with this ``advance`` (0 for dummy flush positions).
-    advance : In(1)
-        Take one position: shift the window, write the line buffers, step the counters.
+    admit : In(1)
+        This clock is round 0 of a slot that carries a position: take ``left``/``right``.
     start : In(1)
-        With ``advance``: this pixel is (0, 0) of a new frame (restarts the counters).
+        With ``admit``: the pixel is (0, 0) of a new frame (restarts the column counter).
+    overlap : In(1)
+        With ``start``: the previous frame still has centres to compute (it was not
+        flushed): keep its coordinates until the new frame's first centre.
+    left, right : In(8)
+        The pixels of the admitted position (0 for dummy positions).
+    first, round : In
+        Round 0 pulse and round of the slot timing at the admission offset.
     window_left, window_right : Out(ArrayLayout(unsigned(8), B * B))
-        Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r).
+        Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r), slot-aligned
+        at offset ``latency``; they change only when a position is admitted.
     tag : Out(tag_layout)
-        Centre of the windows; ``round`` is 0 (positions have no rounds here).
+        The windows' centre, slot-aligned at offset ``latency``.
+    switch_pending : Out(1)
+        A new frame started and its first centre has not been reached yet: another start
+        must wait (frames shorter than the window radius).
     latency : int
-        Positions from a pixel's entry to the window centred on it: r * W + r.
+        Clocks from ``admit`` to the windows and tag.
     """
+
+    latency = LATENCY
 
     def __init__(self, params):
         self.params = params
-        self.latency = params.radius * params.width + params.radius
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
         super().__init__({
-            "left": In(8), "right": In(8), "advance": In(1), "start": In(1),
+            "admit": In(1), "start": In(1), "overlap": In(1),
+            "left": In(8), "right": In(8),
+            "first": In(1), "round": In(range(params.rounds)),
             "window_left": Out(window), "window_right": Out(window),
-            "tag": Out(tag_layout(params)),
+            "tag": Out(tag_layout(params)), "switch_pending": Out(1),
         })
 
     def elaborate(self, platform):
         p = self.params
         width, height, block, r = p.width, p.height, p.block, p.radius
         m = Module()
+        slots = SlotClock(m, self.first, self.round, p.rounds, "input")
 
-        # The line buffers' read address is the column after the incoming pixel's; it is
-        # kept in a register (col_after) rather than incremented in front of the block
-        # RAMs' address inputs.
+        # Column of the admitted pixel: the line buffers' address. A start restarts it at
+        # 0 (one multiplexer level in front of the block RAM's address, from registers).
         col = Signal(range(width))
-        col_after = Signal(range(width))
-        addr = Mux(self.start, 0, col)
-        next_addr = Mux(self.start, 1, col_after)
-        with m.If(self.advance):
-            m.d.sync += [col.eq(next_addr),
-                         col_after.eq(Mux(next_addr == width - 1, 0, next_addr + 1))]
+        address = Mux(self.start, 0, col)
+        with m.If(self.admit):
+            m.d.sync += col.eq(Mux(address == width - 1, 0, address + 1))
 
-        # Centre counters: position 0 of a frame is centred r rows and r columns earlier.
-        first = -(r * width + r)
-        first_x, first_y = first % width, first // width
+        # Two clocks later the line buffers' rows of that column have left the block RAM
+        # and its output register; the pixel, the address and the flags wait for them.
+        admitted = pipe(m, self.admit, 2, "admitted")
+        started = pipe(m, self.start, 2, "started")
+        overlapping = pipe(m, self.overlap, 2, "overlapping")
+        written_address = pipe(m, address, 2, "written_address")
+
+        tag, keep = self._centre(m, slots, admitted, started, overlapping)
+        for name, pixel in (("left", self.left), ("right", self.right)):
+            # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
+            # Every read address differs from the address written in the same clock (the
+            # write trails the read of the same column by two clocks, the next read of it
+            # comes a row later), so Yosys needs no collision logic (no_rw_check).
+            m.submodules[f"lines_{name}"] = lines = Memory(
+                shape=unsigned(8 * (block - 1)), depth=width, init=[],
+                attrs={"no_rw_check": 1})
+            read = lines.read_port(domain="sync")
+            write = lines.write_port()
+            # A plain register right behind the read port: the block RAM's own output
+            # register on ECP5 (the flow packs it), 5 ns shorter than its bare output.
+            older_word = pipe(m, read.data, 1, f"{name}_read")
+            older = [older_word[8 * s:8 * s + 8] for s in range(block - 1)]
+            newest_pixel = pipe(m, pixel, 2, f"{name}_pixel")
+            m.d.comb += [
+                read.addr.eq(address),
+                write.addr.eq(written_address), write.en.eq(admitted),
+                write.data.eq(Cat(newest_pixel, *older[:block - 2])),
+            ]
+            # Column c (0 = oldest, dx = -r) packs its B pixels top (dy = -r) to bottom.
+            columns = [Signal(8 * block, name=f"{name}_column{c}", reset_less=True)
+                       for c in range(block)]
+            with m.If(admitted):
+                m.d.sync += [columns[c].eq(columns[c + 1]) for c in range(block - 1)]
+                m.d.sync += columns[block - 1].eq(Cat(*reversed(older), newest_pixel))
+            window = self.window_left if name == "left" else self.window_right
+            # One assignment of the whole window: per-element assignments would each cost a
+            # full-width assignment cell in the netlist.
+            m.d.comb += window.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
+                                      for row in range(block) for c in range(block)))
+
+        m.d.comb += self.tag.eq(tag)
+        return m
+
+    def _centre(self, m, slots, admitted, started, overlapping):
+        """The centre's tag and the window masks, updated with the window.
+
+        The tag is slot-aligned at offset LATENCY: x, y and live change with each
+        admitted position, ``valid`` says in every slot whether it carries one.
+
+        Returns the tag register and ``keep[row][column]``, 1 where the window pixel lies
+        inside the centre's frame.
+        """
+        p = self.params
+        width, height, block, r = p.width, p.height, p.block, p.radius
+        # Position 0 of a frame is centred r rows and r columns earlier.
+        lag = r * width + r
+        first_x, first_y = -lag % width, -lag // width
         _, highest = y_range(p)
         tag = Signal(tag_layout(p))
-        next_x = Signal.like(tag.x)
-        next_y = Signal.like(tag.y)
-        with m.If(self.start):
-            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y)]
+        next_x, next_y = Signal.like(tag.x), Signal.like(tag.y)
+        next_live = Signal()
+        countdown = Signal(range(lag + 1))
+        m.d.comb += self.switch_pending.eq(countdown != 0)
+        m.d.comb += next_live.eq(tag.live)
+        with m.If(started & ~overlapping):
+            # The previous frame is finished: jump to the new frame's coordinates.
+            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y), next_live.eq(1)]
+        with m.Elif(countdown == 1):
+            # The centre reaches the new frame's pixel (0, 0); x is 0 in both frames' terms.
+            m.d.comb += [next_x.eq(0), next_y.eq(0), next_live.eq(1)]
         with m.Elif(tag.x == width - 1):
             m.d.comb += [next_x.eq(0), next_y.eq(Mux(tag.y < highest, tag.y + 1, tag.y))]
         with m.Else():
             m.d.comb += [next_x.eq(tag.x + 1), next_y.eq(tag.y)]
-        with m.If(self.advance):
-            m.d.sync += [tag.live.eq(1), tag.x.eq(next_x), tag.y.eq(next_y)]
-        m.d.comb += self.tag.eq(tag)
+        with m.If(slots.first(LATENCY - 1)):
+            m.d.sync += tag.valid.eq(admitted)
+        with m.If(admitted):
+            m.d.sync += [tag.x.eq(next_x), tag.y.eq(next_y), tag.live.eq(next_live)]
+            with m.If(started & overlapping):
+                m.d.sync += countdown.eq(lag)
+            with m.Elif(countdown != 0):
+                m.d.sync += countdown.eq(countdown - 1)
 
         # Which window rows/columns lie inside the frame, registered with the counters
         # from their next values: comparing the counters in the same clock would put two
@@ -94,7 +179,7 @@ class InputStage(wiring.Component):
         row_ok = [Signal(name=f"row_ok{k}") for k in range(block)]
         col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
         for k, offset in enumerate(range(-r, r + 1)):
-            with m.If(self.advance):
+            with m.If(admitted):
                 m.d.sync += row_ok[k].eq((next_y >= -offset) & (next_y < height - offset))
                 # The column counter is always in 0 .. W-1: only one side can fail.
                 m.d.sync += col_ok[k].eq(next_x >= -offset if offset < 0 else
@@ -103,27 +188,4 @@ class InputStage(wiring.Component):
                 for row in range(block)]
         m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])
                      for row in range(block) for c in range(block)]
-        for name, pixel, window in (("left", self.left, self.window_left),
-                                    ("right", self.right, self.window_right)):
-            # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
-            m.submodules[f"lines_{name}"] = lines = Memory(
-                shape=unsigned(8 * (block - 1)), depth=width, init=[])
-            rd = lines.read_port(domain="sync")
-            wr = lines.write_port()
-            older = [rd.data[8 * s:8 * s + 8] for s in range(block - 1)]
-            m.d.comb += [
-                rd.addr.eq(next_addr), rd.en.eq(self.advance),
-                wr.addr.eq(addr), wr.en.eq(self.advance),
-                wr.data.eq(Cat(pixel, *older[:block - 2])),
-            ]
-            # Column c (0 = oldest, dx = -r) packs its B pixels top (dy = -r) to bottom.
-            newest_column = Cat(*reversed(older), pixel)
-            columns = [Signal(8 * block, name=f"{name}_column{c}") for c in range(block)]
-            with m.If(self.advance):
-                m.d.sync += [columns[c].eq(columns[c + 1]) for c in range(block - 1)]
-                m.d.sync += columns[block - 1].eq(newest_column)
-            # One assignment of the whole window: per-element assignments would each cost a
-            # full-width assignment cell in the netlist.
-            m.d.comb += window.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
-                                      for row in range(block) for c in range(block)))
-        return m
+        return tag, keep

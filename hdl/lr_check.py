@@ -3,144 +3,243 @@
 Hardware counterpart of :class:`npstereo.golden.wta.RightWTA`,
 :func:`npstereo.golden.lr_check.lr_check` and :func:`~npstereo.golden.lr_check.invalidate_border`.
 
-The right-referenced winner dR(xr) collects the costs S(xr + d, d) of the positions
-xr .. xr + D - 1, so it is final D - 1 positions after xr. A ring of D (cost, disparity)
-slots, slot k for the right pixel k positions back, takes each round's candidates
-(strict ``<`` in increasing d, only for xr = x - d >= 0 in the same row); at every
-position the ring shifts and the slot leaving it is a final dR, kept in a history of the
-last D. The left winners wait D + 1 positions in a delay line, then meet dR(x - dL) in
-that history.
+**Right-referenced WTA.** dR(xr) is the argmin over d of S(xr + d, d): its candidates come
+from the positions xr .. xr + D - 1, candidate d from cost unit d // R in round d % R. So the
+running winner of right pixel xr lives where its candidates are made: with unit i while
+that unit handles it (R positions, rounds j = 0 .. R-1 handle xr = x - i*R - j), in a store
+of R words per unit (LUT RAM, read-modify-write once per round), then it moves to unit
+i + 1. Each unit has one comparator, not one per disparity. Units run one clock apart
+(unit i's costs are delayed i clocks) so that the word a unit finishes in round R-1 is
+registered and ready for the next unit's round 0. The winner leaving the last unit is final:
+dR of the position D - 1 back, which goes into a history of dR indexed by position.
 
-The result is registered once more before it leaves (``clock_latency``): the partner
-lookup is a D:1 multiplexer and the consistency test a subtraction and a comparison,
-which together with the output word's register were the longest path of the whole core
-(rank 7x7, D = 100 on ECP5: 20.5 ns, 13 logic levels).
+**Check.** Left winners dL wait in a store indexed by position until all their partners are
+final (D positions), then meet dR(x - dL) from the history; the partner lookup is a memory
+read, not a D:1 multiplexer. Every slot with a position produces one *retire* pulse at the
+output (the credit for the output queue, see :mod:`.core`), and, if its left pixel lies in
+the frame, one output word.
 """
 
-from amaranth.hdl import Array, Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import bits_for, tag_layout
+from .common import SlotClock, bits_for, pipe, tag_layout
 
-__all__ = ["LRCheck"]
+__all__ = ["LRCheck", "keeps"]
+
+
+def keeps(disparity, partner, threshold):
+    """The consistency test: |dL - dR| <= T (both unsigned)."""
+    difference = Mux(disparity > partner, disparity - partner, partner - disparity)
+    return difference <= threshold
+
+
+def _winning(candidate, held):
+    """A right pixel's candidate replaces its running winner only if strictly smaller:
+    candidates come in increasing d, so ties keep the lowest disparity."""
+    return candidate < held
 
 
 class LRCheck(wiring.Component):
-    """Valid flag and disparity of one position per ``produce``.
+    """Valid flag and disparity of one output word per position.
+
+    Parameters
+    ----------
+    params : StereoParams
+    left_offset : int
+        Where ``disparity``/``left_tag`` are slot-aligned, in clocks after this stage's
+        input (``sums``/``tag``).
 
     Attributes
     ----------
-    en : In(1)
-    costs : In(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
-        S(x, y, tag.round * D/R + i), from the calculation stage.
+    sums : In(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
+        S(x, i*R + round) of unit i for the position ``tag``.
     tag : In(tag_layout)
-    disparity, done : In
-        From the evaluation stage: dL of ``tag``'s position when ``done``.
+        The position of ``sums`` (slot-aligned).
+    first, round : In
+        Slot timing at the input.
+    disparity, left_tag : In
+        dL of the position ``left_tag`` (from the evaluation stage), at ``left_offset``.
+    retire : Out(1)
+        One pulse per slot with a position, at offset ``latency``.
     produce : Out(1)
-        This clock carries a result for an in-frame position (combinational).
+        With ``retire``: an output word, for an in-frame position.
     valid, disparity_out, x, y : Out
-        The result and its position.
+        The word and its position (with ``produce``).
     latency : int
-        Positions from the evaluation stage's result to ``produce``: D + 1 with the check,
-        0 without, ...
-    clock_latency : int
-        ... and then 1 clock (the output register stage).
+        Clocks from the input to ``retire``.
     """
 
-    clock_latency = 1
-
-    def __init__(self, params):
-        self.params = params
-        self.latency = params.disparities + 1 if params.lr_check else 0
-        d_bits = bits_for(params.disparities - 1)
+    def __init__(self, params, left_offset):
+        self.params, self.left_offset = params, left_offset
+        depth, rounds, units = params.disparities, params.rounds, params.per_round
+        if params.lr_check:
+            #: Offset of the final dR leaving the last unit (see elaborate()).
+            self.exit = units + rounds + 1
+            # The left winners' store is written `left_offset` after the input and read
+            # at `exit`; in between the left side runs ahead by up to this many positions.
+            ahead = -(-(self.exit - left_offset) // rounds) + 1
+            self.history_depth = 1 << (depth + max(ahead, 0) + 4 - 1).bit_length()
+            self.latency = self.exit + 4
+        else:
+            self.latency = left_offset + 1
+        d_bits = bits_for(depth - 1)
         layout = tag_layout(params)
         super().__init__({
-            "en": In(1),
-            "costs": In(data.ArrayLayout(unsigned(params.aggregated_cost_bits),
-                                         params.per_round)),
+            "sums": In(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
             "tag": In(layout),
+            "first": In(1), "round": In(range(rounds)),
             "disparity": In(d_bits),
-            "done": In(1),
-            "produce": Out(1),
-            "valid": Out(1),
-            "disparity_out": Out(d_bits),
-            "x": Out(layout["x"].shape),
-            "y": Out(layout["y"].shape),
+            "left_tag": In(layout),
+            "retire": Out(1), "produce": Out(1),
+            "valid": Out(1), "disparity_out": Out(d_bits),
+            "x": Out(layout["x"].shape), "y": Out(layout["y"].shape),
         })
 
-    def _report(self, m, tag, disparity, ready, keep=None):
-        """Outputs from (tag, disparity), registered; ``keep`` takes the registered values.
-
-        ``ready``: this clock holds the final result of ``tag``'s position.
-        """
-        p = self.params
-        staged_tag = Signal.like(tag, name="staged_tag")
-        staged_disparity = Signal.like(disparity, name="staged_disparity")
-        staged_produce = Signal(name="staged_produce")
-        inside = tag.live & (tag.y >= 0) & (tag.y < p.height)
-        with m.If(self.en):
-            m.d.sync += [staged_tag.eq(tag), staged_disparity.eq(disparity),
-                         staged_produce.eq(ready & inside)]
-        kept = 1 if keep is None else keep(staged_tag, staged_disparity)
-        m.d.comb += [
-            self.produce.eq(staged_produce),
-            self.valid.eq(kept & (staged_tag.x >= p.first_valid_column)),
-            self.disparity_out.eq(staged_disparity),
-            self.x.eq(staged_tag.x), self.y.eq(staged_tag.y),
-        ]
+    def _in_frame(self, tag):
+        return tag.live & (tag.y >= 0) & (tag.y < self.params.height)
 
     def elaborate(self, platform):
         p = self.params
         m = Module()
+        slots = SlotClock(m, self.first, self.round, p.rounds, "lr")
         if not p.lr_check:
-            self._report(m, self.tag, self.disparity, self.done)
+            tag = self.left_tag
+            with m.If(slots.first(self.left_offset)):
+                m.d.sync += [self.retire.eq(tag.valid),
+                             self.produce.eq(tag.valid & self._in_frame(tag))]
+            with m.Else():
+                m.d.sync += [self.retire.eq(0), self.produce.eq(0)]
+            m.d.sync += [self.valid.eq(tag.x >= p.first_valid_column),
+                         self.disparity_out.eq(self.disparity),
+                         self.x.eq(tag.x), self.y.eq(tag.y)]
             return m
-
-        depth, per_round = p.disparities, p.per_round
-        cost_bits, d_bits = p.aggregated_cost_bits, bits_for(depth - 1)
-        slot_layout = data.StructLayout({"cost": unsigned(cost_bits), "d": unsigned(d_bits)})
-        slots = [Signal(slot_layout, name=f"right_slot{k}") for k in range(depth)]
-        final = [Signal(d_bits, name=f"right_final{k}") for k in range(depth)]
-        first_round = self.tag.round == 0
-
-        def candidate(k, base):
-            """Slot k's value after the candidate d = k of this round (if xr >= 0)."""
-            cost = self.costs[k % per_round]
-            better = (self.tag.x >= k) & (cost < base.cost)
-            return [slots[k].cost.eq(Mux(better, cost, base.cost)),
-                    slots[k].d.eq(Mux(better, k, base.d))]
-
-        with m.If(self.en & first_round):
-            # New position: shift; slot 0 (xr = x) starts with d = 0, always in the row.
-            m.d.sync += [slots[0].cost.eq(self.costs[0]), slots[0].d.eq(0)]
-            for k in range(1, depth):
-                m.d.sync += (candidate(k, slots[k - 1]) if k < per_round
-                             else [slots[k].eq(slots[k - 1])])
-            m.d.sync += [final[0].eq(slots[depth - 1].d)]
-            m.d.sync += [final[k].eq(final[k - 1]) for k in range(1, depth)]
-        for j in range(1, p.rounds):
-            with m.If(self.en & (self.tag.round == j)):
-                for k in range(j * per_round, (j + 1) * per_round):
-                    m.d.sync += candidate(k, slots[k])
-
-        # Left winners wait until dR of every possible partner is final: after the ring
-        # shift of position x + D, final[m] holds dR(x - m).
-        entry_layout = data.StructLayout({"tag": tag_layout(p), "d": unsigned(d_bits)})
-        waiting = [Signal(entry_layout, name=f"left_wait{k}") for k in range(depth + 1)]
-        with m.If(self.en & self.done):
-            m.d.sync += [waiting[0].tag.eq(self.tag), waiting[0].d.eq(self.disparity)]
-            m.d.sync += [waiting[k].eq(waiting[k - 1]) for k in range(1, depth + 1)]
-        entry = waiting[depth]
-        # Padded to every index value so that the multiplexer is a complete case.
-        partner = Array(final + final[-1:] * (2 ** d_bits - depth))[entry.d]
-        staged_partner = Signal(d_bits)
-        with m.If(self.en):
-            m.d.sync += staged_partner.eq(partner)
-
-        def keep(tag, d):
-            difference = Mux(d > staged_partner, d - staged_partner, staged_partner - d)
-            return (tag.x >= d) & (difference <= p.lr_threshold)
-
-        self._report(m, entry.tag, entry.d, first_round, keep)
+        final, leaving = self._right_winners(m, slots)
+        self._check(m, slots, final, leaving)
         return m
+
+    def _right_winners(self, m, slots):
+        """The chain of units; returns dR leaving the last unit and its pulse (at
+        ``self.exit``)."""
+        p = self.params
+        rounds, units = p.rounds, p.per_round
+        cost_bits, d_bits = p.aggregated_cost_bits, bits_for(p.disparities - 1)
+        entry = data.StructLayout({"cost": unsigned(cost_bits), "d": unsigned(d_bits),
+                                   "empty": unsigned(1)})
+        # Candidates at offset 1: unit i's disparity i*R + j takes part iff xr = x - d is in
+        # the row (x - j >= i*R) and the position lies in the frame.
+        tag = self.tag
+        x_minus_round = Signal(range(-rounds, p.width), name="lr_x_minus_round")
+        in_frame = Signal(name="lr_in_frame")
+        m.d.sync += [x_minus_round.eq(tag.x - slots.round(0)),
+                     in_frame.eq(tag.valid & self._in_frame(tag))]
+        # The store address of the right pixel in round j: (n - j) mod R for the n-th
+        # position, the same in every unit (unit i's pixels are i*R positions older).
+        count = Signal(range(rounds), name="lr_count")
+        address = Signal(range(rounds), name="lr_address")
+        if rounds > 1:
+            with m.If(slots.first(0)):
+                m.d.sync += address.eq(count)
+                with m.If(tag.valid):
+                    m.d.sync += count.eq(Mux(count == rounds - 1, 0, count + 1))
+            with m.Else():
+                m.d.sync += address.eq(Mux(address == 0, rounds - 1, address - 1))
+        valid = slots.delay(tag.valid, 0, 1, "lr_valid")
+
+        forward = None
+        for i in range(units):
+            # Unit i runs i clocks after unit 0: stage A reads at offset 1 + i, stage B
+            # compares and writes back at 2 + i.
+            ok = pipe(m, in_frame & (x_minus_round >= i * rounds), i, f"candidate_ok{i}")
+            cost = pipe(m, pipe(m, self.sums[i], 1, f"candidate_cost{i}"), i,
+                        f"candidate_cost{i}")
+            d = pipe(m, Const(i * rounds, d_bits) + slots.round(1), i, f"candidate_d{i}")
+            m.submodules[f"right_winners{i}"] = store = Memory(
+                shape=entry, depth=rounds, init=[])
+            read, write = store.read_port(domain="comb"), store.write_port()
+            unit_address = pipe(m, address, i, f"lr_address{i}")
+            m.d.comb += read.addr.eq(unit_address)
+            starting = slots.first(1 + i) if rounds > 1 else Const(1)
+            held = Signal(entry, name=f"held{i}", reset_less=True)
+            if i == 0:
+                m.d.sync += [held.eq(read.data), held.empty.eq(starting | read.data.empty)]
+            else:
+                m.d.sync += held.eq(Mux(starting, forward, read.data))
+            candidate_ok = pipe(m, ok, 1, f"candidate_ok{i}_b")
+            candidate_cost = pipe(m, cost, 1, f"candidate_cost{i}_b")
+            candidate_d = pipe(m, d, 1, f"candidate_d{i}_b")
+            better = candidate_ok & (held.empty | _winning(candidate_cost, held.cost))
+            updated = Signal(entry, name=f"updated{i}")
+            m.d.comb += updated.eq(Mux(better, Cat(candidate_cost, candidate_d, Const(0, 1)),
+                                       held))
+            stage_b_valid = slots.delay(valid, 1, 1 + i, f"lr_valid{i}")
+            m.d.comb += [write.addr.eq(pipe(m, unit_address, 1, f"lr_write_address{i}")),
+                         write.en.eq(stage_b_valid), write.data.eq(updated)]
+            handing = stage_b_valid & (slots.first(2 + i + rounds - 1) if rounds > 1
+                                       else Const(1))
+            forward = Signal(entry, name=f"forward{i + 1}", reset_less=True)
+            with m.If(handing):
+                m.d.sync += forward.eq(updated)
+        leaving = Signal(name="right_final_valid")
+        m.d.sync += leaving.eq(handing)
+        return forward.d, leaving
+
+    def _check(self, m, slots, final, leaving):
+        """History of dR, the left winners' store and the check itself."""
+        p = self.params
+        depth, size = p.disparities, self.history_depth
+        d_bits = bits_for(depth - 1)
+        layout = tag_layout(p)
+        index_shape = unsigned(bits_for(size - 1))
+
+        # The left winners, stored by position index.
+        waiting_layout = data.StructLayout({"tag": layout, "d": unsigned(d_bits)})
+        m.submodules.left_winners = waiting = Memory(shape=waiting_layout, depth=size,
+                                                     init=[])
+        left_read, left_write = waiting.read_port(domain="comb"), waiting.write_port()
+        left_count = Signal(index_shape, name="left_count")
+        arriving = slots.first(self.left_offset) & self.left_tag.valid
+        with m.If(arriving):
+            m.d.sync += left_count.eq(left_count + 1)
+        m.d.comb += [left_write.addr.eq(left_count), left_write.en.eq(arriving),
+                     left_write.data.eq(Cat(self.left_tag, self.disparity))]
+
+        # dR leaving the chain belongs to position n - D + 1 when position n leaves it;
+        # then the left winner of position n - D has all its partners.
+        m.submodules.right_history = history = Memory(shape=unsigned(d_bits), depth=size,
+                                                      init=[])
+        history_read, history_write = history.read_port(domain="comb"), history.write_port()
+        exit_count = Signal(index_shape, name="exit_count")
+        primed = Signal(name="primed")          # D positions have left since reset
+        seen = Signal(range(depth + 1), name="exits_seen")
+        with m.If(leaving):
+            m.d.sync += exit_count.eq(exit_count + 1)
+            with m.If(seen != depth):
+                m.d.sync += seen.eq(seen + 1)
+        m.d.comb += primed.eq(seen == depth)
+        m.d.comb += [history_write.addr.eq(exit_count - depth + 1),
+                     history_write.en.eq(leaving), history_write.data.eq(final),
+                     left_read.addr.eq(exit_count - depth)]
+        entry = Signal(waiting_layout, name="checked_left", reset_less=True)
+        checked_index = Signal(index_shape, name="checked_index", reset_less=True)
+        m.d.sync += [entry.eq(left_read.data), checked_index.eq(exit_count - depth)]
+        stage = pipe(m, Cat(leaving, primed), 1, "check_pulse")
+        partner_address = Signal(index_shape, name="partner_address", reset_less=True)
+        m.d.sync += partner_address.eq(checked_index - entry.d)
+        entry2 = pipe(m, entry, 1, "checked_left2")
+        m.d.comb += history_read.addr.eq(partner_address)
+        partner = pipe(m, history_read.data, 1, "partner")
+        entry3 = pipe(m, entry2, 1, "checked_left3")
+        stage = pipe(m, stage, 2, "check_pulse2")
+        kept = entry3.tag.x >= entry3.d
+        if p.lr_threshold is not None:
+            kept = kept & keeps(entry3.d, partner, p.lr_threshold)
+        m.d.sync += [
+            self.retire.eq(stage[0]),
+            self.produce.eq(stage[0] & stage[1] & self._in_frame(entry3.tag)),
+            self.valid.eq(kept & (entry3.tag.x >= p.first_valid_column)),
+            self.disparity_out.eq(entry3.d),
+            self.x.eq(entry3.tag.x), self.y.eq(entry3.tag.y),
+        ]

@@ -20,7 +20,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 __all__ = ["DEFAULT_EVERY", "tree_levels", "register_plan", "popcount_plan", "build_tree",
-           "build_sum", "build_popcount", "full_adder_compress", "AdderTree", "PopCount",
+           "build_sum", "build_popcount", "select_min", "full_adder_compress", "AdderTree", "PopCount",
            "MinTree"]
 
 #: Register stage after every 2 levels: two short ripple adders (ECP5 CCU2C chains) plus
@@ -66,7 +66,8 @@ def _register(m, en, items, level):
     """Registers for every value of every item, loaded while ``en`` is high."""
     out = []
     for i, item in enumerate(items):
-        regs = tuple(Signal(Value.cast(v).shape(), name=f"l{level}_{i}_{j}")
+        # No reset: pipeline registers are never trusted without their valid tag.
+        regs = tuple(Signal(Value.cast(v).shape(), name=f"l{level}_{i}_{j}", reset_less=True)
                      for j, v in enumerate(item))
         with m.If(en):
             m.d.sync += [r.eq(v) for r, v in zip(regs, item)]
@@ -170,7 +171,8 @@ def _takes_upper(lower, upper):
     return upper < lower
 
 
-def _select_min(lower, upper):
+def select_min(lower, upper):
+    """Combine two (value, index) items of a minimum tree: the lower item wins ties."""
     upper_wins = _takes_upper(lower[0], upper[0])
     return (Mux(upper_wins, upper[0], lower[0]), Mux(upper_wins, upper[1], lower[1]))
 
@@ -284,6 +286,6 @@ class MinTree(wiring.Component):
         index_shape = self.index.shape()
         leaves = [(self.values[i], Const(i, index_shape)) for i in range(self.count)]
         plan = register_plan(self.count, self.every)
-        value, index = build_tree(m, self.en, leaves, _select_min, plan)
+        value, index = build_tree(m, self.en, leaves, select_min, plan)
         m.d.comb += [self.min.eq(value), self.index.eq(index)]
         return m

@@ -1,0 +1,173 @@
+"""Aggregation in hardware: the A x A box sum of the matching costs (the paper's 3 x 3).
+
+Hardware counterpart of :func:`npstereo.golden.aggregation.aggregate`. Each of the D/R cost
+units delivers, in round j of a slot, the cost of its disparity i*R + j at the newest
+position. The sum over the A rows is done before this stage when the rows above are kept as
+transformed pixels (``params.stored_rows == "transforms"``: the cost units compute A costs);
+when they are kept as costs, a block RAM per unit holds the A-1 rows above (vertical sum
+here). The sum over the A columns takes, for each round, the vertical sums of the 2a
+previous positions from a store of R words per unit (LUT RAM, one word per round), so the
+stage never stalls and bubbles simply do not write. Rows and columns outside the frame are
+masked from the tag, never from memory contents.
+
+The result is the aggregated cost S of the *centre* position, a rows and a columns behind
+the newest one.
+"""
+
+from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
+from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from .common import SlotClock, pipe, tag_layout
+from .trees import DEFAULT_EVERY, build_sum, register_plan
+
+__all__ = ["Aggregation", "vertical_bits"]
+
+#: Clocks of the vertical sum from stored costs: the address (a register), the block RAM
+#: read, its output register, the adders' register.
+_VERTICAL_LATENCY = 5
+
+
+def vertical_bits(params):
+    """Width of a vertical (column) sum of A costs."""
+    return (params.max_cost * params.aggregation).bit_length()
+
+
+class Aggregation(wiring.Component):
+    """Box sums of the round's D/R disparities, for the centre of the aggregation window.
+
+    Parameters
+    ----------
+    params : StereoParams
+    every : int
+        Register spacing of the adder trees (see :mod:`.trees`).
+
+    Attributes
+    ----------
+    costs : In(ArrayLayout(unsigned(bits), D/R))
+        Per unit, the newest position's cost (``stored_rows == "costs"``: one row, masked
+        where x - d < 0 or outside the frame) or vertical sum (``"transforms"``).
+    tag : In(tag_layout)
+        The newest position, slot-aligned at this stage's input.
+    first, round : In
+        Slot timing at the input.
+    sums : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
+        S(centre, d) for unit i's disparity d = i*R + round.
+    centre : Out(tag_layout)
+        The aggregation window's centre, slot-aligned at the output.
+    latency : int
+        Clocks from input to output.
+    """
+
+    def __init__(self, params, every=DEFAULT_EVERY):
+        self.params, self.every = params, every
+        a = params.agg_radius
+        self.from_costs = a > 0 and params.stored_rows == "costs"
+        in_bits = params.cost_bits if a == 0 or self.from_costs else vertical_bits(params)
+        self.vertical_latency = _VERTICAL_LATENCY if self.from_costs else 0
+        # Horizontal: the taps are registered, then summed.
+        self.horizontal_latency = (1 + sum(register_plan(2 * a + 1, every, 0, True))
+                                   if a else 0)
+        self.latency = self.vertical_latency + self.horizontal_latency
+        units = params.per_round
+        super().__init__({
+            "costs": In(data.ArrayLayout(unsigned(in_bits), units)),
+            "tag": In(tag_layout(params)),
+            "first": In(1), "round": In(range(params.rounds)),
+            "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
+            "centre": Out(tag_layout(params)),
+        })
+
+    def elaborate(self, platform):
+        p = self.params
+        m = Module()
+        slots = SlotClock(m, self.first, self.round, p.rounds, "aggregation")
+        values = [self.costs[i] for i in range(p.per_round)]
+        tag = self.tag
+        if self.from_costs:
+            values = self._vertical(m, slots, values)
+            tag = slots.delay(tag, 0, self.vertical_latency, "vertical_tag")
+        if p.agg_radius:
+            values, tag = self._horizontal(m, slots, values, tag, self.vertical_latency)
+        m.d.comb += [self.sums[i].eq(v) for i, v in enumerate(values)]
+        m.d.comb += self.centre.eq(tag)
+        return m
+
+    def _vertical(self, m, slots, costs):
+        """Column sums over rows y - 2a .. y from a block RAM of the A-1 rows above.
+
+        Word (x, j) of unit i's memory (address x*R + j) holds the costs of disparity
+        i*R + j at column x for the A-1 rows above; every round reads it and writes it
+        back shifted by one row. A column's word is read again only a row later, long
+        after the write-back (three clocks after the read), and never in the clock it is
+        written: no collision logic (no_rw_check).
+        """
+        p = self.params
+        rows, bits, rounds = p.aggregation - 1, p.cost_bits, p.rounds
+        tag = self.tag
+        # x * R without a multiplier: consecutive positions are raster-continuous (x + 1,
+        # or 0 at a line start), so the row base advances by R per position.
+        base = Signal(range(p.width * rounds), name="cost_lines_base")
+        with m.If(slots.first(0) & tag.valid):
+            m.d.sync += base.eq(Mux(tag.x == 0, 0, base + rounds))
+        address = Signal(range(p.width * rounds), name="cost_lines_address")
+        m.d.sync += address.eq(base + slots.round(1))
+        # The rows above exist where y - k >= 0 (the current row's cost is already masked).
+        above = [Signal(name=f"row_above_ok{k}") for k in range(1, rows + 1)]
+        m.d.sync += [ok.eq(tag.y >= k) for k, ok in zip(range(1, rows + 1), above)]
+        above = [slots.delay(ok, 1, 3, f"row_above_ok{k}", reset_less=True)
+                 for k, ok in enumerate(above, 1)]
+        reading = slots.delay(tag.valid, 0, 2, "cost_lines_reading")
+        written = slots.delay(reading, 2, 2, "cost_lines_written")
+        sums = []
+        for i, cost in enumerate(costs):
+            m.submodules[f"cost_lines{i}"] = lines = Memory(
+                shape=unsigned(rows * bits), depth=p.width * rounds, init=[],
+                attrs={"no_rw_check": 1})
+            read, write = lines.read_port(domain="sync"), lines.write_port()
+            m.d.comb += [read.addr.eq(address), read.en.eq(reading)]
+            stored_word = pipe(m, read.data, 1, f"cost_lines{i}_read")
+            stored = [stored_word[k * bits:(k + 1) * bits] for k in range(rows)]
+            newest = pipe(m, cost, 4, f"vertical_in{i}")
+            m.d.comb += [write.addr.eq(pipe(m, address, 2, f"cost_lines{i}_write_address")),
+                         write.en.eq(written),
+                         write.data.eq(Cat(newest, *stored[:rows - 1]))]
+            total = newest + sum(Mux(ok, row, 0) for ok, row in zip(above, stored))
+            sums.append(pipe(m, total, 1, f"vertical{i}"))
+        return sums
+
+    def _horizontal(self, m, slots, values, tag, offset):
+        """Row sums over the positions x - 2a .. x, reported for the centre x - a."""
+        p = self.params
+        a, width, rounds = p.agg_radius, p.width, p.rounds
+        bits = len(values[0])
+        # The centre trails the newest position by a columns (a row earlier near a line
+        # start); it is the output tag, a rows up as well.
+        newest_x = tag.x
+        centre = Signal(tag_layout(p), name="aggregation_centre")
+        wraps = newest_x < a
+        m.d.comb += [centre.eq(tag),
+                     centre.x.eq(Mux(wraps, newest_x + width - a, newest_x - a)),
+                     centre.y.eq(Mux(wraps, tag.y - a - 1, tag.y - a))]
+        # Tap k holds column x_newest - k: inside the frame iff k <= x_newest, or, when the
+        # centre lies in the previous line (x_newest < a), iff k > x_newest.
+        keep = [Signal(name=f"column_ok{k}") for k in range(2 * a + 1)]
+        m.d.sync += [ok.eq(wraps == (newest_x < k)) for k, ok in enumerate(keep)]
+        sums = []
+        for i, value in enumerate(values):
+            m.submodules[f"row_taps{i}"] = taps = Memory(
+                shape=unsigned(2 * a * bits), depth=rounds, init=[])
+            read = taps.read_port(domain="comb")
+            write = taps.write_port()
+            round_ = slots.round(offset)
+            older = [read.data[k * bits:(k + 1) * bits] for k in range(2 * a)]
+            m.d.comb += [read.addr.eq(round_), write.addr.eq(round_), write.en.eq(tag.valid),
+                         write.data.eq(Cat(value, *older[:2 * a - 1]))]
+            registered = pipe(m, Cat(value, *older), 1, f"row_taps{i}")
+            terms = [Mux(keep[k], registered[k * bits:(k + 1) * bits], 0)
+                     for k in range(2 * a + 1)]
+            total = build_sum(m, 1, terms, self.every, 0, True)
+            sums.append(total[:p.aggregated_cost_bits])
+        out_tag = slots.delay(centre, offset, self.horizontal_latency, "centre_tag")
+        return sums, out_tag
