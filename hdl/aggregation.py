@@ -19,7 +19,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, pipe, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, tag_layout
 from .trees import DEFAULT_EVERY, build_sum, register_plan
 
 __all__ = ["Aggregation", "vertical_bits"]
@@ -74,7 +74,7 @@ class Aggregation(wiring.Component):
         super().__init__({
             "costs": In(data.ArrayLayout(unsigned(in_bits), units)),
             "tag": In(tag_layout(params)),
-            "first": In(1), "round": In(range(params.rounds)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
             "centre": Out(tag_layout(params)),
         })
@@ -153,17 +153,15 @@ class Aggregation(wiring.Component):
         # Tap k holds column x_newest - k: inside the frame iff k <= x_newest, or, when the
         # centre lies in the previous line (x_newest < a), iff k > x_newest.
         keep = [Signal(name=f"column_ok{k}") for k in range(2 * a + 1)]
-        m.d.sync += [ok.eq(wraps == (newest_x < k)) for k, ok in enumerate(keep)]
+        m.d.sync += [ok.eq(wraps == (newest_x < k) if k else ~wraps)
+                     for k, ok in enumerate(keep)]
         sums = []
         for i, value in enumerate(values):
-            m.submodules[f"row_taps{i}"] = taps = Memory(
-                shape=unsigned(2 * a * bits), depth=rounds, init=[])
-            read = taps.read_port(domain="comb")
-            write = taps.write_port()
+            taps = Store(m, f"row_taps{i}", unsigned(2 * a * bits), rounds)
             round_ = slots.round(offset)
-            older = [read.data[k * bits:(k + 1) * bits] for k in range(2 * a)]
-            m.d.comb += [read.addr.eq(round_), write.addr.eq(round_), write.en.eq(tag.valid),
-                         write.data.eq(Cat(value, *older[:2 * a - 1]))]
+            word = taps.read(round_)
+            older = [word[k * bits:(k + 1) * bits] for k in range(2 * a)]
+            taps.write(round_, Cat(value, *older[:2 * a - 1]), tag.valid)
             registered = pipe(m, Cat(value, *older), 1, f"row_taps{i}")
             terms = [Mux(keep[k], registered[k * bits:(k + 1) * bits], 0)
                      for k in range(2 * a + 1)]

@@ -31,7 +31,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .aggregation import Aggregation, vertical_bits
-from .common import SlotClock, bits_for, pipe, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, tag_layout
 from .matching_cost import MatchingCost
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
@@ -92,7 +92,7 @@ class CalculationStage(wiring.Component):
         super().__init__({
             "window_left": In(window), "window_right": In(window),
             "tag": In(tag_layout(params)),
-            "first": In(1), "round": In(range(params.rounds)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
             "centre": Out(tag_layout(params)),
             "best_cost": Out(params.aggregated_cost_bits),
@@ -202,15 +202,13 @@ class CalculationStage(wiring.Component):
         other_pointers = pointers(passing, "stores")
         operands, previous = [], None
         for i in range(p.per_round):
-            m.submodules[f"right_store{i}"] = store = Memory(
-                shape=unsigned(bits), depth=rounds, init=[])
-            read, write = store.read_port(domain="comb"), store.write_port()
+            store = Store(m, f"right_store{i}", unsigned(bits), rounds)
             written, reading = first_pointers if i == 0 else other_pointers
-            m.d.comb += [read.addr.eq(reading), write.addr.eq(written),
-                         write.en.eq(entering if i == 0 else passing),
-                         write.data.eq(newest if i == 0 else previous.data)]
-            operands.append(pipe(m, read.data, 1, f"right_operand{i}"))
-            previous = read
+            word = store.read(reading)
+            store.write(written, newest if i == 0 else previous,
+                        entering if i == 0 else passing)
+            operands.append(pipe(m, word, 1, f"right_operand{i}"))
+            previous = word
         return operands
 
     def _costs(self, m, slots, left_word, right_words, tag):

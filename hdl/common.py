@@ -15,10 +15,11 @@ A value that belongs to a slot (a tag, a transformed pixel) is *slot-aligned at 
 it holds the slot's value during the R clocks from o clocks after the slot's first clock.
 """
 
-from amaranth.hdl import Const, Mux, Signal, signed, unsigned
+from amaranth.hdl import Const, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import data
+from amaranth.lib.memory import Memory
 
-__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "SlotClock"]
+__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "SlotClock", "Store"]
 
 
 def bits_for(maximum):
@@ -51,14 +52,18 @@ def tag_layout(params):
     })
 
 
-def pipe(m, value, steps, name):
-    """``value`` delayed by ``steps`` clocks: a free-running shift register without reset.
+def pipe(m, value, steps, name, reset=False):
+    """``value`` delayed by ``steps`` clocks: a free-running shift register.
 
-    Datapath registers have no reset: nothing downstream trusts their contents without a
-    valid tag, and a reset net reaching every one of them would only cost routing.
+    Datapath registers have no reset (``reset=False``): nothing downstream trusts their
+    contents without a valid tag, and a reset net reaching every one of them would only
+    cost routing. Control bits that start writes or count positions must be reset, or a
+    pulse in flight before a reset would come out after it.
     """
+    if len(Value.cast(value)) == 0:
+        return value
     for step in range(steps):
-        reg = Signal(value.shape(), name=f"{name}_p{step}", reset_less=True)
+        reg = Signal(value.shape(), name=f"{name}_p{step}", reset_less=not reset)
         m.d.sync += reg.eq(value)
         value = reg
     return value
@@ -130,3 +135,42 @@ class SlotClock:
                 self.m.d.sync += reg.eq(value)
             value, done = reg, done + jump
         return value
+
+
+class Store:
+    """A few words of LUT RAM with an asynchronous read port, or a register for one word.
+
+    Parameters
+    ----------
+    m : Module
+    name : str
+    shape : shape-castable
+        One word.
+    depth : int
+        Words; a depth of 1 (R = 1) is a plain register (a memory would need a 0-bit
+        address, which Verilog cannot declare).
+    """
+
+    def __init__(self, m, name, shape, depth):
+        self.m, self.depth = m, depth
+        if depth > 1:
+            m.submodules[name] = memory = Memory(shape=shape, depth=depth, init=[])
+            self._read, self._write = memory.read_port(domain="comb"), memory.write_port()
+        else:
+            self._word = Signal(shape, name=name, reset_less=True)
+
+    def read(self, address):
+        """The word at ``address`` (combinational)."""
+        if self.depth == 1:
+            return self._word
+        self.m.d.comb += self._read.addr.eq(address)
+        return self._read.data
+
+    def write(self, address, data, enable):
+        """Write ``data`` at ``address`` at the clock edge when ``enable``."""
+        if self.depth == 1:
+            with self.m.If(enable):
+                self.m.d.sync += self._word.eq(data)
+            return
+        self.m.d.comb += [self._write.addr.eq(address), self._write.data.eq(data),
+                          self._write.en.eq(enable)]

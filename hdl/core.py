@@ -112,8 +112,9 @@ class NpStereoCore(wiring.Component):
         m.submodules.lr_check = lr = self.lr_check
 
         # The slot clock: round 0 .. R-1, free-running.
-        round_ = Signal(range(rounds), name="round")
+        round_ = Const(0)
         if rounds > 1:
+            round_ = Signal(range(rounds), name="round")
             m.d.sync += round_.eq(Mux(round_ == rounds - 1, 0, round_ + 1))
         first = Signal(name="slot_first", init=1)
         m.d.sync += first.eq(round_ == rounds - 1)
@@ -149,7 +150,7 @@ class NpStereoCore(wiring.Component):
         has_credit = Signal(init=1)
         credits_next = (credits - admit + (queue.r_rdy & self.m_axis_tready)
                         + (lr.retire & ~lr.produce))
-        m.d.sync += [credits.eq(credits_next), has_credit.eq(credits_next != 0)]
+        m.d.sync += [credits.eq(credits_next), has_credit.eq(_has_room(credits_next))]
 
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
@@ -244,6 +245,11 @@ class NpStereoCore(wiring.Component):
             lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out),
         ]
         return m
+
+
+def _has_room(credits):
+    """Whether the output queue is sure to take the word of one more position."""
+    return credits != 0
 
 
 def _queue(m, incoming, push_valid, pop, ready):

@@ -47,7 +47,7 @@ class EvaluationStage(wiring.Component):
         super().__init__({
             "cost": In(params.aggregated_cost_bits),
             "disparity": In(bits_for(params.disparities - 1)),
-            "first": In(1), "round": In(range(params.rounds)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "tag": In(tag_layout(params)),
             "disparity_out": Out(bits_for(params.disparities - 1)),
             "tag_out": Out(tag_layout(params)),

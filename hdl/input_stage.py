@@ -21,7 +21,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, pipe, tag_layout, y_range
+from .common import SlotClock, bits_for, pipe, tag_layout, y_range
 
 __all__ = ["InputStage"]
 
@@ -71,7 +71,7 @@ class InputStage(wiring.Component):
         super().__init__({
             "admit": In(1), "start": In(1), "overlap": In(1),
             "left": In(8), "right": In(8),
-            "first": In(1), "round": In(range(params.rounds)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "window_left": Out(window), "window_right": Out(window),
             "tag": Out(tag_layout(params)), "switch_pending": Out(1),
         })
@@ -91,9 +91,9 @@ class InputStage(wiring.Component):
 
         # Two clocks later the line buffers' rows of that column have left the block RAM
         # and its output register; the pixel, the address and the flags wait for them.
-        admitted = pipe(m, self.admit, 2, "admitted")
-        started = pipe(m, self.start, 2, "started")
-        overlapping = pipe(m, self.overlap, 2, "overlapping")
+        admitted = pipe(m, self.admit, 2, "admitted", reset=True)
+        started = pipe(m, self.start, 2, "started", reset=True)
+        overlapping = pipe(m, self.overlap, 2, "overlapping", reset=True)
         written_address = pipe(m, address, 2, "written_address")
 
         tag, keep = self._centre(m, slots, admitted, started, overlapping)
@@ -138,39 +138,60 @@ class InputStage(wiring.Component):
         The tag is slot-aligned at offset LATENCY: x, y and live change with each
         admitted position, ``valid`` says in every slot whether it carries one.
 
+        Two frames' coordinates coexist while frames overlap. The window masks follow the
+        *window centre's* frame: a pixel's transform sees zeros outside its own frame. The
+        tag that leaves the stage names the same position, but in the frame of the
+        *aggregation centre*, a rows and a columns further back, for everything after the
+        transforms masks rows and columns relative to that centre: the finishing frame's
+        last aggregation window must see the new frame's first row as outside. So the tag
+        switches to the new frame a*W + a positions after the window masks do.
+
         Returns the tag register and ``keep[row][column]``, 1 where the window pixel lies
-        inside the centre's frame.
+        inside the window centre's frame.
         """
         p = self.params
-        width, height, block, r = p.width, p.height, p.block, p.radius
+        width, height, block, r, a = p.width, p.height, p.block, p.radius, p.agg_radius
         # Position 0 of a frame is centred r rows and r columns earlier.
         lag = r * width + r
+        tag_lag = lag + a * width + a
         first_x, first_y = -lag % width, -lag // width
         _, highest = y_range(p)
         tag = Signal(tag_layout(p))
-        next_x, next_y = Signal.like(tag.x), Signal.like(tag.y)
+        window_y = Signal.like(tag.y)
+        next_x, next_y, next_window_y = Signal.like(tag.x), Signal.like(tag.y), Signal.like(tag.y)
         next_live = Signal()
-        countdown = Signal(range(lag + 1))
-        m.d.comb += self.switch_pending.eq(countdown != 0)
+        countdown = Signal(range(tag_lag + 1))    # positions until the tag's switch
+        # A register of its own, not a comparison: it feeds the admission decision.
+        pending = Signal()
+        m.d.comb += self.switch_pending.eq(pending)
         m.d.comb += next_live.eq(tag.live)
+        line_end = tag.x == width - 1
+
+        def advance(y):
+            return Mux(line_end, Mux(y < highest, y + 1, y), y)
+
+        m.d.comb += [next_x.eq(Mux(line_end, 0, tag.x + 1)),
+                     next_y.eq(advance(tag.y)), next_window_y.eq(advance(window_y))]
         with m.If(started & ~overlapping):
             # The previous frame is finished: jump to the new frame's coordinates.
-            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y), next_live.eq(1)]
-        with m.Elif(countdown == 1):
-            # The centre reaches the new frame's pixel (0, 0); x is 0 in both frames' terms.
-            m.d.comb += [next_x.eq(0), next_y.eq(0), next_live.eq(1)]
-        with m.Elif(tag.x == width - 1):
-            m.d.comb += [next_x.eq(0), next_y.eq(Mux(tag.y < highest, tag.y + 1, tag.y))]
+            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y), next_window_y.eq(first_y),
+                         next_live.eq(1)]
         with m.Else():
-            m.d.comb += [next_x.eq(tag.x + 1), next_y.eq(tag.y)]
+            # The window centre reaches the new frame's pixel (0, 0), then the aggregation
+            # centre does (the window centre is at (a, a) then); x agrees in both frames.
+            with m.If(countdown == tag_lag - lag + 1):
+                m.d.comb += next_window_y.eq(0)
+            with m.If(countdown == 1):
+                m.d.comb += [next_y.eq(a), next_live.eq(1)]
         with m.If(slots.first(LATENCY - 1)):
             m.d.sync += tag.valid.eq(admitted)
         with m.If(admitted):
-            m.d.sync += [tag.x.eq(next_x), tag.y.eq(next_y), tag.live.eq(next_live)]
+            m.d.sync += [tag.x.eq(next_x), tag.y.eq(next_y), tag.live.eq(next_live),
+                         window_y.eq(next_window_y)]
             with m.If(started & overlapping):
-                m.d.sync += countdown.eq(lag)
+                m.d.sync += [countdown.eq(tag_lag), pending.eq(1)]
             with m.Elif(countdown != 0):
-                m.d.sync += countdown.eq(countdown - 1)
+                m.d.sync += [countdown.eq(countdown - 1), pending.eq(countdown != 1)]
 
         # Which window rows/columns lie inside the frame, registered with the counters
         # from their next values: comparing the counters in the same clock would put two
@@ -180,7 +201,8 @@ class InputStage(wiring.Component):
         col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
         for k, offset in enumerate(range(-r, r + 1)):
             with m.If(admitted):
-                m.d.sync += row_ok[k].eq((next_y >= -offset) & (next_y < height - offset))
+                m.d.sync += row_ok[k].eq((next_window_y >= -offset)
+                                         & (next_window_y < height - offset))
                 # The column counter is always in 0 .. W-1: only one side can fail.
                 m.d.sync += col_ok[k].eq(next_x >= -offset if offset < 0 else
                                          next_x < width - offset if offset > 0 else 1)

@@ -25,7 +25,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, bits_for, pipe, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, tag_layout
 
 __all__ = ["LRCheck", "keeps"]
 
@@ -90,7 +90,7 @@ class LRCheck(wiring.Component):
         super().__init__({
             "sums": In(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
             "tag": In(layout),
-            "first": In(1), "round": In(range(rounds)),
+            "first": In(1), "round": In(bits_for(rounds - 1)),
             "disparity": In(d_bits),
             "left_tag": In(layout),
             "retire": Out(1), "produce": Out(1),
@@ -137,9 +137,10 @@ class LRCheck(wiring.Component):
                      in_frame.eq(tag.valid & self._in_frame(tag))]
         # The store address of the right pixel in round j: (n - j) mod R for the n-th
         # position, the same in every unit (unit i's pixels are i*R positions older).
-        count = Signal(range(rounds), name="lr_count")
-        address = Signal(range(rounds), name="lr_address")
+        address = Const(0)
         if rounds > 1:
+            count = Signal(range(rounds), name="lr_count")
+            address = Signal(range(rounds), name="lr_address")
             with m.If(slots.first(0)):
                 m.d.sync += address.eq(count)
                 with m.If(tag.valid):
@@ -156,17 +157,15 @@ class LRCheck(wiring.Component):
             cost = pipe(m, pipe(m, self.sums[i], 1, f"candidate_cost{i}"), i,
                         f"candidate_cost{i}")
             d = pipe(m, Const(i * rounds, d_bits) + slots.round(1), i, f"candidate_d{i}")
-            m.submodules[f"right_winners{i}"] = store = Memory(
-                shape=entry, depth=rounds, init=[])
-            read, write = store.read_port(domain="comb"), store.write_port()
+            store = Store(m, f"right_winners{i}", entry, rounds)
             unit_address = pipe(m, address, i, f"lr_address{i}")
-            m.d.comb += read.addr.eq(unit_address)
+            stored = store.read(unit_address)
             starting = slots.first(1 + i) if rounds > 1 else Const(1)
             held = Signal(entry, name=f"held{i}", reset_less=True)
             if i == 0:
-                m.d.sync += [held.eq(read.data), held.empty.eq(starting | read.data.empty)]
+                m.d.sync += [held.eq(stored), held.empty.eq(starting | stored.empty)]
             else:
-                m.d.sync += held.eq(Mux(starting, forward, read.data))
+                m.d.sync += held.eq(Mux(starting, forward, stored))
             candidate_ok = pipe(m, ok, 1, f"candidate_ok{i}_b")
             candidate_cost = pipe(m, cost, 1, f"candidate_cost{i}_b")
             candidate_d = pipe(m, d, 1, f"candidate_d{i}_b")
@@ -175,8 +174,8 @@ class LRCheck(wiring.Component):
             m.d.comb += updated.eq(Mux(better, Cat(candidate_cost, candidate_d, Const(0, 1)),
                                        held))
             stage_b_valid = slots.delay(valid, 1, 1 + i, f"lr_valid{i}")
-            m.d.comb += [write.addr.eq(pipe(m, unit_address, 1, f"lr_write_address{i}")),
-                         write.en.eq(stage_b_valid), write.data.eq(updated)]
+            store.write(pipe(m, unit_address, 1, f"lr_write_address{i}"), updated,
+                        stage_b_valid)
             handing = stage_b_valid & (slots.first(2 + i + rounds - 1) if rounds > 1
                                        else Const(1))
             forward = Signal(entry, name=f"forward{i + 1}", reset_less=True)
@@ -225,14 +224,14 @@ class LRCheck(wiring.Component):
         entry = Signal(waiting_layout, name="checked_left", reset_less=True)
         checked_index = Signal(index_shape, name="checked_index", reset_less=True)
         m.d.sync += [entry.eq(left_read.data), checked_index.eq(exit_count - depth)]
-        stage = pipe(m, Cat(leaving, primed), 1, "check_pulse")
+        stage = pipe(m, Cat(leaving, primed), 1, "check_pulse", reset=True)
         partner_address = Signal(index_shape, name="partner_address", reset_less=True)
         m.d.sync += partner_address.eq(checked_index - entry.d)
         entry2 = pipe(m, entry, 1, "checked_left2")
         m.d.comb += history_read.addr.eq(partner_address)
         partner = pipe(m, history_read.data, 1, "partner")
         entry3 = pipe(m, entry2, 1, "checked_left3")
-        stage = pipe(m, stage, 2, "check_pulse2")
+        stage = pipe(m, stage, 2, "check_pulse2", reset=True)
         kept = entry3.tag.x >= entry3.d
         if p.lr_threshold is not None:
             kept = kept & keeps(entry3.d, partner, p.lr_threshold)

@@ -161,9 +161,12 @@ def test_broken_tie_rule_is_caught(monkeypatch):
 
 
 def test_broken_evaluation_comparison_is_caught(monkeypatch):
-    """``<=`` instead of ``<`` across partitions (later partition wins ties) is detected."""
+    """Across partitions, equal costs going to the later partition (not the lower
+    disparity) is detected."""
     from npstereo.hdl import evaluation_stage
-    monkeypatch.setattr(evaluation_stage, "_better", lambda candidate, best: candidate <= best)
+    bits = StereoParams(disparities=8).disparity_bits
+    monkeypatch.setattr(evaluation_stage, "_better",
+                        lambda candidate, best: candidate[bits:] <= best[bits:])
     params = StereoParams(transform="census", block=3, disparities=8, rounds=4,
                           lr_threshold=None, width=20, height=8)
     pair = scene_pair(np.random.default_rng(3), 20, 8, 8)
@@ -177,13 +180,12 @@ def test_missing_size_is_a_parameter_error():
         NpStereoCore(StereoParams(transform="census", block=3, disparities=8))
 
 
-def test_broken_enable_prediction_is_caught(monkeypatch):
-    """An enable that runs ahead of the input (ignores whether a pixel is there) must fail."""
+def test_broken_credit_is_caught(monkeypatch):
+    """Admission that ignores the output queue's room loses words under backpressure."""
     from npstereo.hdl import core as core_module
-    monkeypatch.setattr(core_module, "_enable",
-                        lambda state, last_round, head_valid, head_is_start, out_room: out_room)
-    params = StereoParams(transform="census", block=3, disparities=8, rounds=2,
+    monkeypatch.setattr(core_module, "_has_room", lambda credits: 1)
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=1,
                           lr_threshold=None, width=20, height=8)
     pair = scene_pair(np.random.default_rng(3), 20, 8, 8)
-    with pytest.raises(AssertionError):
-        check_frames(params, [pair], frame_beats(*pair), valid_prob=GAPS, ready_prob=GAPS)
+    with pytest.raises(AssertionError, match="pixels differ|output frames"):
+        check_frames(params, [pair], frame_beats(*pair), valid_prob=1.0, ready_prob=0.3)
