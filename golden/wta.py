@@ -1,13 +1,11 @@
 """Winner-Takes-All inside one calculation round (partition) and across partitions.
 
-Round j of the hardware evaluates the disparities j, j + R, j + 2R, ... (cost unit i holds
-disparity i*R + j): a strided partition, because each cost unit then walks through R
-consecutive disparities and can take its right-image transforms from a short local store
-(docs/hardware.md). Every WTA here keeps, among equal costs, the lowest disparity: inside a
-partition by a strict ``<`` while visiting disparities in increasing order, across
-partitions and in the right-referenced map by comparing (cost, disparity) pairs. The result
-is therefore the global argmin with ties to the lowest disparity, the same for every R,
-which tests/test_golden.py checks.
+Round j evaluates the disparities j*D/R .. (j+1)*D/R - 1 (the paper's partitions; cost
+unit i holds disparity j*D/R + i). Every WTA here keeps, among equal costs, the lowest
+disparity: a pair replaces the winner if its cost is lower, or equal with a lower
+disparity, so the result is the global argmin with ties to the lowest disparity whatever
+the order of the visits and for every R, which tests/test_golden.py checks. (The hardware
+visits disparities in increasing order and needs only a strict ``<`` on the cost.)
 """
 
 import numpy as np
@@ -16,8 +14,8 @@ __all__ = ["partition_disparities", "wta_partition", "evaluate_partitions", "Rig
 
 
 def partition_disparities(params, round_):
-    """Disparities of calculation round ``round_``: round_, round_ + R, ... in increasing order."""
-    return range(round_, params.disparities, params.rounds)
+    """Disparities of calculation round ``round_``, in increasing order."""
+    return range(round_ * params.per_round, (round_ + 1) * params.per_round)
 
 
 def _beats(cost, disparity, best_cost, best_disparity, out):

@@ -4,15 +4,15 @@ Hardware counterpart of :mod:`npstereo.golden.transform`, :mod:`~npstereo.golden
 :mod:`~npstereo.golden.aggregation` and :func:`npstereo.golden.wta.wta_partition`, in that
 order. A position takes a slot of R clocks (rounds); D/R cost units work in every round.
 
-**Cost unit i holds the disparities i*R .. i*R + R - 1** and evaluates i*R + j in round j
-(a strided partition per round, see :mod:`npstereo.golden.wta`). Over a position it needs
-the right-image transforms of the R consecutive columns x - i*R - j, and at the next
-position the same columns shifted by one: one column enters, from unit i - 1, and the
-oldest leaves, to unit i + 1. So each unit keeps its R right transforms in a store of R
-words (LUT RAM, written once per position, read once per round) and hands its oldest word
-to the next unit by a direct wire from its read port to the next store's write port. No
-multiplexer chooses among the D transforms and no wire is longer than one unit: this
-replaces the ring of D registers rotating through wide multiplexers, whose wiring kept
+**Round j evaluates disparities j*D/R .. (j+1)*D/R - 1; cost unit i takes j*D/R + i** (the
+paper's partitions). Unit i therefore needs, in round j, the right-image transform of
+column x - j*D/R - i, and at the next position the same columns shifted by one: the word
+unit i reads in round j is the word unit i + 1 needs in round j of the next position. Each
+unit keeps its R words in a store of R words of LUT RAM (one read and one write per clock,
+the write to the word just read), and hands every word it reads to the next unit; the last
+unit's words go round to unit 0 one round later, and the newest column enters unit 0 in
+round R-1. Only one word per unit moves per clock, between neighbours (and round the ring):
+this replaces a ring of D registers rotating through wide multiplexers, whose wiring kept
 census 9x9 from routing and whose flip-flops made the extended census too big.
 
 For the vertical aggregation the stage either computes the costs of the A rows of the window
@@ -31,7 +31,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .aggregation import Aggregation, vertical_bits
-from .common import SlotClock, Store, bits_for, pipe, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
@@ -85,7 +85,10 @@ class CalculationStage(wiring.Component):
         self.vertical = self.costed + (sum(register_plan(self.rows, every, 0, True))
                                        if self.rows > 1 else 1)
         self.sums_latency = self.vertical + self.aggregation.latency
-        self.min_latency = sum(register_plan(params.per_round, every))
+        # A register after every level of the minimum tree: a level is a comparison (a
+        # carry chain) whose result selects the whole (cost, disparity) pair, and two of
+        # them do not fit a 150 MHz clock on ECP5 (11 ns measured).
+        self.min_latency = sum(register_plan(params.per_round, 1 if every else 0))
         self.latency = self.sums_latency + self.min_latency + 1
         units = params.per_round
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
@@ -124,15 +127,16 @@ class CalculationStage(wiring.Component):
         m.d.comb += [aggregation.costs[i].eq(c) for i, c in enumerate(costs)]
         m.d.comb += [self.sums.eq(aggregation.sums), self.centre.eq(aggregation.centre)]
 
-        # WTA of the partition: unit i's leaf carries its first disparity i*R, to which the
-        # round is added at the root (ties keep the lowest unit, i.e. the lowest disparity).
-        d_shape = unsigned(bits_for(p.disparities - 1))
-        leaves = [(aggregation.sums[i], Const(i * p.rounds, d_shape))
-                  for i in range(p.per_round)]
-        plan = register_plan(p.per_round, self.every)
-        best_cost, best_base = build_tree(m, 1, leaves, select_min, plan)
-        round_ = slots.round(self.sums_latency + self.min_latency)
-        m.d.sync += [self.best_cost.eq(best_cost), self.best_disparity.eq(best_base + round_)]
+        # WTA of the partition: unit i's leaf carries i, to which the round's first disparity
+        # j*D/R is added at the root (ties keep the lowest unit, i.e. the lowest disparity).
+        index_shape = unsigned(bits_for(p.per_round - 1))
+        leaves = [(aggregation.sums[i], Const(i, index_shape)) for i in range(p.per_round)]
+        plan = register_plan(p.per_round, 1 if self.every else 0)
+        best_cost, best_unit = build_tree(m, 1, leaves, select_min, plan)
+        first_disparity = round_base(m, slots, self.sums_latency + self.min_latency,
+                                     p.per_round)
+        m.d.sync += [self.best_cost.eq(best_cost),
+                     self.best_disparity.eq(first_disparity + best_unit)]
         return m
 
     def _transformed_rows(self, m, slots, left, right):
@@ -169,46 +173,49 @@ class CalculationStage(wiring.Component):
     def _right_stores(self, m, slots, newest, tag):
         """Each unit's R right-image words; returns the units' read registers.
 
-        Unit i reads, in round j, the word of column x - i*R - j (a register later it is
-        the unit's operand). The newest word enters unit 0 in the clock before round 0;
-        in the same clock (the end of round R-1 of the previous slot) every other unit
-        takes the word its predecessor is reading, the oldest one there, which is the
-        newest one here. ``tag`` is slot-aligned at ``self.transformed``, the clock of
-        the writes.
+        In round j unit i reads the word of column x - j*D/R - i (a register later it is
+        the unit's operand) and, in a slot with a position, writes it into unit i + 1 at
+        the same place for the next position (the LUT RAM's read is asynchronous, the
+        write lands at the clock edge). Unit 0 takes the last unit's word of round j as its
+        word j + 1, and in round R-1 the newest column as its word 0; so that this never
+        overwrites a word it has still to read, unit 0's words rotate by one place per
+        position. ``tag`` is slot-aligned at ``self.transformed``: the newest column's
+        slot, which begins in the clock after round R-1.
         """
         p = self.params
-        rounds, bits = p.rounds, len(newest)
-        at = self.transformed
-        entering = slots.first(at) & tag.valid                 # unit 0 takes a new word
-        leaving_tag = slots.delay(tag, at, 1, "store_tag")     # the slot in rounds now
-        passing = slots.first(at) & leaving_tag.valid          # the others take one
-
-        def pointers(write, name):
-            """Write pointer and read pointer (newest word, then one older per round)."""
-            if rounds == 1:
-                return Const(0), Const(0)
-            written = Signal(range(rounds), name=f"{name}_write")
-            reading = Signal(range(rounds), name=f"{name}_read")
-            newest_word = Mux(write, written, Mux(written == 0, rounds - 1, written - 1))
-            with m.If(slots.first(at)):
-                m.d.sync += reading.eq(newest_word)
-                with m.If(write):
-                    m.d.sync += written.eq(Mux(written == rounds - 1, 0, written + 1))
+        rounds, units, bits = p.rounds, p.per_round, len(newest)
+        round_ = slots.round(self.stored)
+        last_round = slots.first(self.transformed)          # round R-1 of the stores
+        current = slots.delay(tag, self.transformed, 1, "store_tag")   # slot in its rounds
+        moving = current.valid
+        entering = last_round & tag.valid                   # the newest column comes in
+        if rounds == 1:
+            base = address0 = write0 = Const(0)
+        else:
+            # Unit 0's word j lives at (base + j) mod R; base steps back one place per
+            # position, so word j + 1 of the next position lands where word j was read.
+            base = Signal(range(rounds), name="store0_base")
+            address0 = Signal(range(rounds), name="store0_address")
+            stepped = Mux(base == 0, rounds - 1, base - 1)
+            following = Mux(moving, stepped, base)       # the next position's base
+            with m.If(last_round):
+                m.d.sync += [base.eq(following), address0.eq(following)]
             with m.Else():
-                m.d.sync += reading.eq(Mux(reading == 0, rounds - 1, reading - 1))
-            return written, reading
-
-        first_pointers = pointers(entering, "store0")
-        other_pointers = pointers(passing, "stores")
-        operands, previous = [], None
-        for i in range(p.per_round):
-            store = Store(m, f"right_store{i}", unsigned(bits), rounds)
-            written, reading = first_pointers if i == 0 else other_pointers
-            word = store.read(reading)
-            store.write(written, newest if i == 0 else previous,
-                        entering if i == 0 else passing)
-            operands.append(pipe(m, word, 1, f"right_operand{i}"))
-            previous = word
+                m.d.sync += address0.eq(Mux(address0 == rounds - 1, 0, address0 + 1))
+            write0 = Mux(last_round, following, address0)
+        words, operands = [], []
+        stores = [Store(m, f"right_store{i}", unsigned(bits), rounds) for i in range(units)]
+        for i, store in enumerate(stores):
+            words.append(store.read(address0 if i == 0 else round_))
+            operands.append(pipe(m, words[-1], 1, f"right_operand{i}"))
+        for i, store in enumerate(stores):
+            if i:
+                store.write(round_, words[i - 1], moving)
+            elif rounds == 1:
+                store.write(0, newest, entering)
+            else:
+                store.write(write0, Mux(last_round, newest, words[-1]),
+                            Mux(last_round, entering, moving))
         return operands
 
     def _costs(self, m, slots, left_word, right_words, tag):
@@ -221,9 +228,9 @@ class CalculationStage(wiring.Component):
         p = self.params
         start = self.stored + 1
         bits = p.transform_bits
-        # x - j once, then one constant comparison per unit: x - d >= 0 <=> x - j >= i*R.
-        x_minus_round = Signal(range(-p.rounds, p.width), name="x_minus_round")
-        m.d.sync += x_minus_round.eq(tag.x - slots.round(start))
+        # x - j*D/R once, then one constant comparison per unit: x - d >= 0 <=> x - j*D/R >= i.
+        x_minus_round = Signal(range(-p.disparities, p.width), name="x_minus_round")
+        m.d.sync += x_minus_round.eq(tag.x - round_base(m, slots, start, p.per_round))
         rows_ok = []
         for k in range(self.rows):
             ok = Signal(name=f"cost_row_ok{k}")
@@ -232,7 +239,7 @@ class CalculationStage(wiring.Component):
         masked = []
         for i, units in enumerate(self.cost_units):
             in_row = Signal(name=f"in_row{i}")
-            m.d.sync += in_row.eq(x_minus_round >= i * p.rounds)
+            m.d.sync += in_row.eq(x_minus_round >= i)
             in_row = pipe(m, in_row, self.costed - start - 2, f"in_row{i}")
             row_costs = []
             for k, unit in enumerate(units):

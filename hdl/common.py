@@ -19,7 +19,7 @@ from amaranth.hdl import Const, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import data
 from amaranth.lib.memory import Memory
 
-__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "SlotClock", "Store"]
+__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "round_base", "SlotClock", "Store"]
 
 
 def bits_for(maximum):
@@ -66,6 +66,18 @@ def pipe(m, value, steps, name, reset=False):
         reg = Signal(value.shape(), name=f"{name}_p{step}", reset_less=not reset)
         m.d.sync += reg.eq(value)
         value = reg
+    return value
+
+
+def round_base(m, slots, offset, step):
+    """round * ``step`` at ``offset`` (the round's first disparity), without a multiplier:
+    a register that restarts at 0 with each slot and adds ``step`` every clock."""
+    if slots.rounds == 1:
+        return Const(0)
+    assert offset >= 1, "the counter restarts from the slot pulse a clock ahead"
+    value = Signal(range(slots.rounds * step), name=f"{slots.name}_round_base{offset}")
+    restart = (value == (slots.rounds - 1) * step) | slots.first(offset - 1)
+    m.d.sync += value.eq(Mux(restart, 0, value + step))
     return value
 
 

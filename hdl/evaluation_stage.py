@@ -1,14 +1,11 @@
 """Evaluation stage: WTA across the R partition results of a position.
 
 Hardware counterpart of :func:`npstereo.golden.wta.evaluate_partitions`: the partitions
-arrive one per round; a running winner takes a later partition's (cost, disparity) only if
-the pair is smaller, compared as one number with the cost in the high bits, so equal costs
-keep the lower disparity whichever round it came from (the partitions are strided, see
-:mod:`npstereo.golden.wta`). The result is the global argmin with ties to the lowest
-disparity.
+arrive in increasing order, one per round, and a running winner keeps the earlier one on a
+tie (strict ``<``), so the result is the global argmin with ties to the lowest disparity.
 """
 
-from amaranth.hdl import Cat, Module, Mux, Signal
+from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -18,7 +15,7 @@ __all__ = ["EvaluationStage"]
 
 
 def _better(candidate, best):
-    """A partition's (cost, disparity) replaces the running winner only if smaller."""
+    """A later partition replaces the running winner only if strictly better."""
     return candidate < best
 
 
@@ -57,13 +54,14 @@ class EvaluationStage(wiring.Component):
         p = self.params
         m = Module()
         slots = SlotClock(m, self.first, self.round, p.rounds, "evaluation")
-        candidate = Cat(self.disparity, self.cost)
-        best = Signal.like(candidate, name="best", reset_less=True)
-        running = Mux(slots.first(0) | _better(candidate, best), candidate, best)
-        m.d.sync += best.eq(running)
+        best_cost = Signal.like(self.cost, name="best_cost", reset_less=True)
+        best_disparity = Signal.like(self.disparity, name="best_disparity", reset_less=True)
+        take = slots.first(0) | _better(self.cost, best_cost)
+        disparity = Mux(take, self.disparity, best_disparity)
+        m.d.sync += [best_cost.eq(Mux(take, self.cost, best_cost)), best_disparity.eq(disparity)]
         final = Signal.like(self.disparity, name="final", reset_less=True)
         with m.If(slots.first(p.rounds - 1) if p.rounds > 1 else 1):
-            m.d.sync += final.eq(running[:len(self.disparity)])
+            m.d.sync += final.eq(disparity)
         m.d.comb += [self.disparity_out.eq(final),
                      self.tag_out.eq(slots.delay(self.tag, 0, p.rounds, "evaluated_tag"))]
         return m

@@ -193,21 +193,19 @@ class InputStage(wiring.Component):
             with m.Elif(countdown != 0):
                 m.d.sync += [countdown.eq(countdown - 1), pending.eq(countdown != 1)]
 
-        # Which window rows/columns lie inside the frame, registered with the counters
-        # from their next values: comparing the counters in the same clock would put two
+        # Which window pixels lie inside the frame, one register per pixel from the
+        # counters' next values: comparing the counters in the same clock would put two
         # carry chains (this one and the transform's comparison) in front of the
-        # transform's first register.
-        row_ok = [Signal(name=f"row_ok{k}") for k in range(block)]
-        col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
-        for k, offset in enumerate(range(-r, r + 1)):
-            with m.If(admitted):
-                m.d.sync += row_ok[k].eq((next_window_y >= -offset)
-                                         & (next_window_y < height - offset))
-                # The column counter is always in 0 .. W-1: only one side can fail.
-                m.d.sync += col_ok[k].eq(next_x >= -offset if offset < 0 else
-                                         next_x < width - offset if offset > 0 else 1)
+        # transform's first register, and one flag per window row fanned out to a whole
+        # row of both windows (5.6 ns of routing on ECP5).
+        row_ok = [(next_window_y >= -offset) & (next_window_y < height - offset)
+                  for offset in range(-r, r + 1)]
+        # The column counter is always in 0 .. W-1: only one side can fail.
+        col_ok = [next_x >= -offset if offset < 0 else next_x < width - offset if offset > 0
+                  else 1 for offset in range(-r, r + 1)]
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
                 for row in range(block)]
-        m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])
-                     for row in range(block) for c in range(block)]
+        with m.If(admitted):
+            m.d.sync += [keep[row][c].eq(row_ok[row] & col_ok[c])
+                         for row in range(block) for c in range(block)]
         return tag, keep

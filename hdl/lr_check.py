@@ -25,7 +25,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, Store, bits_for, pipe, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 
 __all__ = ["LRCheck", "keeps"]
 
@@ -77,7 +77,7 @@ class LRCheck(wiring.Component):
         depth, rounds, units = params.disparities, params.rounds, params.per_round
         if params.lr_check:
             #: Offset of the final dR leaving the last unit (see elaborate()).
-            self.exit = units + rounds + 1
+            self.exit = rounds + 2
             # The left winners' store is written `left_offset` after the input and read
             # at `exit`; in between the left side runs ahead by up to this many positions.
             ahead = -(-(self.exit - left_offset) // rounds) + 1
@@ -121,69 +121,64 @@ class LRCheck(wiring.Component):
         return m
 
     def _right_winners(self, m, slots):
-        """The chain of units; returns dR leaving the last unit and its pulse (at
-        ``self.exit``)."""
+        """The units' stores of running winners; returns dR leaving the last unit and its
+        pulse (at ``self.exit``).
+
+        In round j unit i reads (stage A, offset 1) the winner of xr = x - j*D/R - i,
+        compares it with its candidate d = j*D/R + i (stage B, offset 2) and writes the
+        result where the next unit reads it in round j of the next position (the last unit
+        writes unit 0's word j + 1). The next unit has read its own word j a clock before
+        the write lands, and reads it again R clocks later: no skew, no bypass. Unit 0's
+        word 0 is a fresh winner (d = 0 is every right pixel's first candidate). With
+        R = 1 each store is a register that the next unit reads in stage B directly.
+        """
         p = self.params
         rounds, units = p.rounds, p.per_round
         cost_bits, d_bits = p.aggregated_cost_bits, bits_for(p.disparities - 1)
         entry = data.StructLayout({"cost": unsigned(cost_bits), "d": unsigned(d_bits),
                                    "empty": unsigned(1)})
-        # Candidates at offset 1: unit i's disparity i*R + j takes part iff xr = x - d is in
-        # the row (x - j >= i*R) and the position lies in the frame.
-        tag = self.tag
-        x_minus_round = Signal(range(-rounds, p.width), name="lr_x_minus_round")
+        # Candidates at stage B: unit i's disparity j*D/R + i takes part iff xr = x - d is
+        # in the row (x - j*D/R >= i) and the position lies in the frame.
+        tag = slots.delay(self.tag, 0, 1, "lr_tag")
+        x_minus_base = Signal(range(-p.disparities, p.width), name="lr_x_minus_base")
         in_frame = Signal(name="lr_in_frame")
-        m.d.sync += [x_minus_round.eq(tag.x - slots.round(0)),
+        m.d.sync += [x_minus_base.eq(tag.x - round_base(m, slots, 1, units)),
                      in_frame.eq(tag.valid & self._in_frame(tag))]
-        # The store address of the right pixel in round j: (n - j) mod R for the n-th
-        # position, the same in every unit (unit i's pixels are i*R positions older).
-        address = Const(0)
-        if rounds > 1:
-            count = Signal(range(rounds), name="lr_count")
-            address = Signal(range(rounds), name="lr_address")
-            with m.If(slots.first(0)):
-                m.d.sync += address.eq(count)
-                with m.If(tag.valid):
-                    m.d.sync += count.eq(Mux(count == rounds - 1, 0, count + 1))
-            with m.Else():
-                m.d.sync += address.eq(Mux(address == 0, rounds - 1, address - 1))
-        valid = slots.delay(tag.valid, 0, 1, "lr_valid")
-
-        forward = None
-        for i in range(units):
-            # Unit i runs i clocks after unit 0: stage A reads at offset 1 + i, stage B
-            # compares and writes back at 2 + i.
-            ok = pipe(m, in_frame & (x_minus_round >= i * rounds), i, f"candidate_ok{i}")
-            cost = pipe(m, pipe(m, self.sums[i], 1, f"candidate_cost{i}"), i,
-                        f"candidate_cost{i}")
-            d = pipe(m, Const(i * rounds, d_bits) + slots.round(1), i, f"candidate_d{i}")
-            store = Store(m, f"right_winners{i}", entry, rounds)
-            unit_address = pipe(m, address, i, f"lr_address{i}")
-            stored = store.read(unit_address)
-            starting = slots.first(1 + i) if rounds > 1 else Const(1)
-            held = Signal(entry, name=f"held{i}", reset_less=True)
-            if i == 0:
-                m.d.sync += [held.eq(stored), held.empty.eq(starting | stored.empty)]
+        round_a, round_b = slots.round(1), slots.round(2)
+        first_disparity = pipe(m, round_base(m, slots, 1, units), 1, "lr_first_disparity")
+        writing = slots.delay(tag.valid, 1, 1, "lr_writing")
+        stores = [Store(m, f"right_winners{i}", entry, rounds) for i in range(units)]
+        updated_words = []
+        for i, store in enumerate(stores):
+            ok = in_frame & (x_minus_base >= i)
+            cost = pipe(m, self.sums[i], 2, f"candidate_cost{i}")
+            if rounds > 1:
+                held = Signal(entry, name=f"held{i}", reset_less=True)
+                m.d.sync += held.eq(store.read(round_a))
+                fresh = slots.first(2)
             else:
-                m.d.sync += held.eq(Mux(starting, forward, stored))
-            candidate_ok = pipe(m, ok, 1, f"candidate_ok{i}_b")
-            candidate_cost = pipe(m, cost, 1, f"candidate_cost{i}_b")
-            candidate_d = pipe(m, d, 1, f"candidate_d{i}_b")
-            better = candidate_ok & (held.empty | _winning(candidate_cost, held.cost))
+                held = store.read(0)
+                fresh = Const(1)
+            empty = held.empty | fresh if i == 0 else held.empty
+            better = ok & (empty | _winning(cost, held.cost))
             updated = Signal(entry, name=f"updated{i}")
-            m.d.comb += updated.eq(Mux(better, Cat(candidate_cost, candidate_d, Const(0, 1)),
+            m.d.comb += updated.eq(Mux(better, Cat(cost, first_disparity + i, Const(0, 1)),
                                        held))
-            stage_b_valid = slots.delay(valid, 1, 1 + i, f"lr_valid{i}")
-            store.write(pipe(m, unit_address, 1, f"lr_write_address{i}"), updated,
-                        stage_b_valid)
-            handing = stage_b_valid & (slots.first(2 + i + rounds - 1) if rounds > 1
-                                       else Const(1))
-            forward = Signal(entry, name=f"forward{i + 1}", reset_less=True)
-            with m.If(handing):
-                m.d.sync += forward.eq(updated)
+            updated_words.append(updated)
+        for i, store in enumerate(stores):
+            if i:
+                store.write(round_b, updated_words[i - 1], writing)
+            elif rounds > 1:
+                # The last unit's word j becomes unit 0's word j + 1 (none after R-1).
+                last = slots.first(2 + rounds - 1)
+                store.write(Mux(round_b == rounds - 1, 0, round_b + 1), updated_words[-1],
+                            writing & ~last)
         leaving = Signal(name="right_final_valid")
-        m.d.sync += leaving.eq(handing)
-        return forward.d, leaving
+        final = Signal(d_bits, name="right_final", reset_less=True)
+        last = slots.first(2 + rounds - 1) if rounds > 1 else Const(1)
+        m.d.sync += leaving.eq(writing & last)
+        m.d.sync += final.eq(updated_words[-1].d)
+        return final, leaving
 
     def _check(self, m, slots, final, leaving):
         """History of dR, the left winners' store and the check itself."""

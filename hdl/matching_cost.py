@@ -10,7 +10,7 @@ from amaranth.hdl import Module, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .transform import absolute_difference
+from .transform import absolute_difference, build_sad, sad_plan
 from .trees import DEFAULT_EVERY, build_popcount, build_sum, build_tree, popcount_plan, \
     register_plan
 
@@ -46,7 +46,7 @@ class MatchingCost(wiring.Component):
             "census": (self._census_cost,
                        sum(popcount_plan(params.neighbours, every, 0, every > 0))),
             "ext-census": (self._ext_census_cost,
-                           sum(register_plan(params.neighbours, every, 1, every > 0))),
+                           sum(sad_plan(params.neighbours, every, 0, every > 0))),
         }[params.transform]
         super().__init__({
             "left": In(unsigned(params.transform_bits)),
@@ -74,10 +74,9 @@ class MatchingCost(wiring.Component):
         return build_popcount(m, self.en, bits, self.every, 0, self.every > 0)
 
     def _ext_census_cost(self, m):
-        differences = [absolute_difference(self.left.word_select(n, 8),
-                                           self.right.word_select(n, 8))
-                       for n in range(self.params.neighbours)]
-        return build_sum(m, self.en, differences, self.every, 1, self.every > 0)
+        pairs = [(self.left.word_select(n, 8), self.right.word_select(n, 8))
+                 for n in range(self.params.neighbours)]
+        return build_sad(m, self.en, pairs, self.every, 0, self.every > 0)[:self.params.cost_bits]
 
     def elaborate(self, platform):
         m = Module()

@@ -15,10 +15,10 @@ from amaranth.hdl import Cat, Module, Mux, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from .trees import DEFAULT_EVERY, build_popcount, build_sum, build_tree, popcount_plan, \
-    register_plan
+from .trees import DEFAULT_EVERY, _add, build_popcount, build_tree, full_adder_compress, \
+    popcount_plan, register_plan
 
-__all__ = ["xi", "absolute_difference", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
+__all__ = ["xi", "absolute_difference", "sad_leaves", "sad_plan", "build_sad", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
 
 
 def xi(centre, neighbour):
@@ -40,6 +40,39 @@ def absolute_difference(a, b):
     """
     width = max(len(a), len(b))
     return Mux(b < a, (a - b)[:width], (b - a)[:width])
+
+
+def sad_leaves(pairs):
+    """The leaves of an adder tree whose sum is sum |a - b| over ``pairs``.
+
+    |a - b| costs two subtractions and a multiplexer; with one subtraction d = a - b and
+    its borrow s, |d| = (d xor s...s) + s, and the k increments are collected once: the
+    leaves are the k conditionally inverted differences, then the borrows counted by full
+    adders (2-bit leaves, placed last so that they are added among themselves first).
+    """
+    inverted, borrows = [], []
+    for a, b in pairs:
+        width = max(len(a), len(b))
+        difference = a - b
+        borrow = difference[width]
+        inverted.append(difference[:width] ^ borrow.replicate(width))
+        borrows.append(borrow)
+    return inverted + full_adder_compress(borrows)
+
+
+def sad_plan(count, every, depth=0, register_output=False):
+    """:func:`register_plan` of the tree over :func:`sad_leaves` of ``count`` pairs."""
+    return register_plan(count + (count + 2) // 3, every, depth + 1, register_output)
+
+
+def build_sad(m, en, pairs, every, depth=0, register_output=False):
+    """sum |a - b| over ``pairs``; latency ``sum(sad_plan(len(pairs), ...))``.
+
+    The subtraction counts as one level against the register spacing, the inversion is
+    merged into it.
+    """
+    plan = sad_plan(len(pairs), every, depth, register_output)
+    return build_tree(m, en, [(leaf,) for leaf in sad_leaves(pairs)], _add, plan)[0]
 
 
 class _WindowTransform(wiring.Component):
@@ -116,11 +149,11 @@ class ExtRank(_WindowTransform):
     """Eq. 7: sum of |P - P'| over the neighbours (differences, then an adder tree)."""
 
     def _latency(self):
-        return sum(register_plan(self.params.neighbours, self.every, 1, self.every > 0))
+        return sum(sad_plan(self.params.neighbours, self.every, 0, self.every > 0))
 
     def _value(self, m, centre, neighbours):
-        differences = [absolute_difference(centre, p) for p in neighbours]
-        return build_sum(m, self.en, differences, self.every, 1, self.every > 0)
+        return build_sad(m, self.en, [(centre, p) for p in neighbours], self.every, 0,
+                         self.every > 0)[:self.params.transform_bits]
 
 
 class ExtCensus(_WindowTransform):
