@@ -92,11 +92,9 @@ class InputStage(wiring.Component):
         # Two clocks later the line buffers' rows of that column have left the block RAM
         # and its output register; the pixel, the address and the flags wait for them.
         admitted = pipe(m, self.admit, 2, "admitted", reset=True)
-        started = pipe(m, self.start, 2, "started", reset=True)
-        overlapping = pipe(m, self.overlap, 2, "overlapping", reset=True)
         written_address = pipe(m, address, 2, "written_address")
 
-        tag, keep = self._centre(m, slots, admitted, started, overlapping)
+        tag, keep = self._centre(m, slots)
         for name, pixel in (("left", self.left), ("right", self.right)):
             # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
             # Every read address differs from the address written in the same clock (the
@@ -132,7 +130,7 @@ class InputStage(wiring.Component):
         m.d.comb += self.tag.eq(tag)
         return m
 
-    def _centre(self, m, slots, admitted, started, overlapping):
+    def _centre(self, m, slots):
         """The centre's tag and the window masks, updated with the window.
 
         The tag is slot-aligned at offset LATENCY: x, y and live change with each
@@ -156,52 +154,76 @@ class InputStage(wiring.Component):
         tag_lag = lag + a * width + a
         first_x, first_y = -lag % width, -lag // width
         _, highest = y_range(p)
-        tag = Signal(tag_layout(p))
-        window_y = Signal.like(tag.y)
-        next_x, next_y, next_window_y = Signal.like(tag.x), Signal.like(tag.y), Signal.like(tag.y)
-        next_live = Signal()
+        layout = tag_layout(p)
+
+        # The centre steps a clock after the admission, a clock before the window shifts:
+        # the step (its counters and multiplexers) and the masks (comparisons of the new
+        # counters) are two clocks' work, not one. The step uses flags registered from
+        # the counters (x at the line end, rows below the saturation, the countdown's two
+        # events) instead of comparing them on its way.
+        stepping = pipe(m, self.admit, 1, "stepping", reset=True)
+        start = pipe(m, self.start, 1, "stepping_start", reset=True)
+        overlap = pipe(m, self.overlap, 1, "stepping_overlap", reset=True)
+        x = Signal(layout["x"].shape, name="centre_x")
+        y = Signal(layout["y"].shape, name="centre_y")
+        window_y = Signal(layout["y"].shape, name="window_y")
+        live = Signal(name="centre_live")
         countdown = Signal(range(tag_lag + 1))    # positions until the tag's switch
+        line_end = Signal(name="centre_line_end")              # x == W - 1
+        y_room, window_room = Signal(name="y_room"), Signal(name="window_y_room")
+        switch_window = Signal(name="switch_window")           # countdown == window event
+        switch_tag = Signal(name="switch_tag")                 # countdown == 1
         # A register of its own, not a comparison: it feeds the admission decision.
         pending = Signal()
         m.d.comb += self.switch_pending.eq(pending)
-        m.d.comb += next_live.eq(tag.live)
-        line_end = tag.x == width - 1
+        # The rows change only at line ends, W > 2 steps apart: flags a clock late are
+        # in time.
+        m.d.sync += [y_room.eq(y < highest), window_room.eq(window_y < highest)]
+        window_event = tag_lag - lag + 1
 
-        def advance(y):
-            return Mux(line_end, Mux(y < highest, y + 1, y), y)
+        with m.If(stepping):
+            with m.If(start & ~overlap):
+                # The previous frame is finished: jump to the new frame's coordinates.
+                m.d.sync += [x.eq(first_x), y.eq(first_y), window_y.eq(first_y),
+                             live.eq(1), line_end.eq(first_x == width - 1)]
+            with m.Else():
+                m.d.sync += [x.eq(Mux(line_end, 0, x + 1)),
+                             line_end.eq(~line_end & (x == width - 2))]
+                with m.If(line_end & y_room):
+                    m.d.sync += y.eq(y + 1)
+                with m.If(line_end & window_room):
+                    m.d.sync += window_y.eq(window_y + 1)
+                # The window centre reaches the new frame's pixel (0, 0), then the
+                # aggregation centre does (the window centre is at (a, a) then); x agrees
+                # in both frames.
+                with m.If(switch_window):
+                    m.d.sync += window_y.eq(0)
+                with m.If(switch_tag):
+                    m.d.sync += [y.eq(a), live.eq(1)]
+            with m.If(start & overlap):
+                m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
+                             switch_window.eq(tag_lag == window_event),
+                             switch_tag.eq(tag_lag == 1)]
+            with m.Elif(countdown != 0):
+                m.d.sync += [countdown.eq(countdown - 1), pending.eq(countdown > 1),
+                             switch_window.eq(countdown == window_event + 1),
+                             switch_tag.eq(countdown == 2)]
 
-        m.d.comb += [next_x.eq(Mux(line_end, 0, tag.x + 1)),
-                     next_y.eq(advance(tag.y)), next_window_y.eq(advance(window_y))]
-        with m.If(started & ~overlapping):
-            # The previous frame is finished: jump to the new frame's coordinates.
-            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y), next_window_y.eq(first_y),
-                         next_live.eq(1)]
-        with m.Else():
-            # The window centre reaches the new frame's pixel (0, 0), then the aggregation
-            # centre does (the window centre is at (a, a) then); x agrees in both frames.
-            with m.If(countdown == tag_lag - lag + 1):
-                m.d.comb += next_window_y.eq(0)
-            with m.If(countdown == 1):
-                m.d.comb += [next_y.eq(a), next_live.eq(1)]
+        # The tag leaves with the window (slot-aligned at LATENCY).
+        tag = Signal(layout)
+        admitted = pipe(m, stepping, 1, "admitted_tag", reset=True)
         with m.If(slots.first(LATENCY - 1)):
             m.d.sync += tag.valid.eq(admitted)
         with m.If(admitted):
-            m.d.sync += [tag.x.eq(next_x), tag.y.eq(next_y), tag.live.eq(next_live),
-                         window_y.eq(next_window_y)]
-            with m.If(started & overlapping):
-                m.d.sync += [countdown.eq(tag_lag), pending.eq(1)]
-            with m.Elif(countdown != 0):
-                m.d.sync += [countdown.eq(countdown - 1), pending.eq(countdown != 1)]
+            m.d.sync += [tag.x.eq(x), tag.y.eq(y), tag.live.eq(live)]
 
-        # Which window pixels lie inside the frame, one register per pixel from the
-        # counters' next values: comparing the counters in the same clock would put two
-        # carry chains (this one and the transform's comparison) in front of the
-        # transform's first register, and one flag per window row fanned out to a whole
-        # row of both windows (5.6 ns of routing on ECP5).
-        row_ok = [(next_window_y >= -offset) & (next_window_y < height - offset)
+        # Which window pixels lie inside the frame, one register per pixel, from the
+        # stepped counters: one flag per window row would fan out to a whole row of both
+        # windows (5.6 ns of routing on ECP5).
+        row_ok = [(window_y >= -offset) & (window_y < height - offset)
                   for offset in range(-r, r + 1)]
         # The column counter is always in 0 .. W-1: only one side can fail.
-        col_ok = [next_x >= -offset if offset < 0 else next_x < width - offset if offset > 0
+        col_ok = [x >= -offset if offset < 0 else x < width - offset if offset > 0
                   else 1 for offset in range(-r, r + 1)]
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
                 for row in range(block)]
