@@ -190,19 +190,28 @@ class CalculationStage(wiring.Component):
         moving = current.valid
         entering = last_round & tag.valid                   # the newest column comes in
         if rounds == 1:
-            base = address0 = write0 = Const(0)
+            address0 = write0_enable = Const(0)
         else:
             # Unit 0's word j lives at (base + j) mod R; base steps back one place per
-            # position, so word j + 1 of the next position lands where word j was read.
+            # position, so word j + 1 of the next position lands where word j was read,
+            # and in round R-1 the newest word lands on the next position's base. The
+            # address and the write enable reach the LUT RAM straight from registers
+            # (each drives a whole word of RAM cells), loaded a clock ahead.
             base = Signal(range(rounds), name="store0_base")
             address0 = Signal(range(rounds), name="store0_address")
+            write0_enable = Signal(name="store0_write")
             stepped = Mux(base == 0, rounds - 1, base - 1)
             following = Mux(moving, stepped, base)       # the next position's base
+            before_last = slots.first(self.transformed - 1)
+            coming = slots.delay(self.tag, 0, self.transformed - 1, "store_next_tag")
             with m.If(last_round):
-                m.d.sync += [base.eq(following), address0.eq(following)]
+                m.d.sync += base.eq(following)
+            with m.If(before_last | last_round):
+                m.d.sync += address0.eq(following)
             with m.Else():
                 m.d.sync += address0.eq(Mux(address0 == rounds - 1, 0, address0 + 1))
-            write0 = Mux(last_round, following, address0)
+            m.d.sync += write0_enable.eq(Mux(before_last, coming.valid,
+                                             Mux(last_round, tag.valid, moving)))
         words, operands = [], []
         stores = [Store(m, f"right_store{i}", unsigned(bits), rounds) for i in range(units)]
         for i, store in enumerate(stores):
@@ -214,8 +223,7 @@ class CalculationStage(wiring.Component):
             elif rounds == 1:
                 store.write(0, newest, entering)
             else:
-                store.write(write0, Mux(last_round, newest, words[-1]),
-                            Mux(last_round, entering, moving))
+                store.write(address0, Mux(last_round, newest, words[-1]), write0_enable)
         return operands
 
     def _costs(self, m, slots, left_word, right_words, tag):

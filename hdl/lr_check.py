@@ -80,9 +80,11 @@ class LRCheck(wiring.Component):
             self.exit = rounds + 2
             # The left winners' store is written `left_offset` after the input and read
             # at `exit`; in between the left side runs ahead by up to this many positions.
+            # The history is read 3 clocks after `exit`, while up to 3 more positions
+            # write it.
             ahead = -(-(self.exit - left_offset) // rounds) + 1
-            self.history_depth = 1 << (depth + max(ahead, 0) + 4 - 1).bit_length()
-            self.latency = self.exit + 4
+            self.history_depth = 1 << (depth + max(ahead, 0) + 6 - 1).bit_length()
+            self.latency = self.exit + 6
         else:
             self.latency = left_offset + 1
         d_bits = bits_for(depth - 1)
@@ -181,7 +183,12 @@ class LRCheck(wiring.Component):
         return final, leaving
 
     def _check(self, m, slots, final, leaving):
-        """History of dR, the left winners' store and the check itself."""
+        """History of dR, the left winners' store and the check itself.
+
+        Both stores may become block RAM (D words and more): they are read synchronously
+        and their data pass a plain register (the RAM's own output register on ECP5)
+        before any logic, and no word is read in the clock it is written (no_rw_check).
+        """
         p = self.params
         depth, size = p.disparities, self.history_depth
         d_bits = bits_for(depth - 1)
@@ -191,8 +198,8 @@ class LRCheck(wiring.Component):
         # The left winners, stored by position index.
         waiting_layout = data.StructLayout({"tag": layout, "d": unsigned(d_bits)})
         m.submodules.left_winners = waiting = Memory(shape=waiting_layout, depth=size,
-                                                     init=[])
-        left_read, left_write = waiting.read_port(domain="comb"), waiting.write_port()
+                                                     init=[], attrs={"no_rw_check": 1})
+        left_read, left_write = waiting.read_port(domain="sync"), waiting.write_port()
         left_count = Signal(index_shape, name="left_count")
         arriving = slots.first(self.left_offset) & self.left_tag.valid
         with m.If(arriving):
@@ -203,8 +210,8 @@ class LRCheck(wiring.Component):
         # dR leaving the chain belongs to position n - D + 1 when position n leaves it;
         # then the left winner of position n - D has all its partners.
         m.submodules.right_history = history = Memory(shape=unsigned(d_bits), depth=size,
-                                                      init=[])
-        history_read, history_write = history.read_port(domain="comb"), history.write_port()
+                                                      init=[], attrs={"no_rw_check": 1})
+        history_read, history_write = history.read_port(domain="sync"), history.write_port()
         exit_count = Signal(index_shape, name="exit_count")
         primed = Signal(name="primed")          # D positions have left since reset
         seen = Signal(range(depth + 1), name="exits_seen")
@@ -216,24 +223,23 @@ class LRCheck(wiring.Component):
         m.d.comb += [history_write.addr.eq(exit_count - depth + 1),
                      history_write.en.eq(leaving), history_write.data.eq(final),
                      left_read.addr.eq(exit_count - depth)]
-        entry = Signal(waiting_layout, name="checked_left", reset_less=True)
-        checked_index = Signal(index_shape, name="checked_index", reset_less=True)
-        m.d.sync += [entry.eq(left_read.data), checked_index.eq(exit_count - depth)]
-        stage = pipe(m, Cat(leaving, primed), 1, "check_pulse", reset=True)
+        # Clock 1: the RAM; 2: its output register; 3: the partner's address; 4: the RAM;
+        # 5: its output register; 6: the check's result.
+        entry = pipe(m, left_read.data, 1, "checked_left")
+        checked_index = pipe(m, exit_count - depth, 2, "checked_index")
         partner_address = Signal(index_shape, name="partner_address", reset_less=True)
         m.d.sync += partner_address.eq(checked_index - entry.d)
-        entry2 = pipe(m, entry, 1, "checked_left2")
         m.d.comb += history_read.addr.eq(partner_address)
         partner = pipe(m, history_read.data, 1, "partner")
-        entry3 = pipe(m, entry2, 1, "checked_left3")
-        stage = pipe(m, stage, 2, "check_pulse2", reset=True)
-        kept = entry3.tag.x >= entry3.d
+        checked = pipe(m, entry, 3, "checked_left_late")
+        stage = pipe(m, Cat(leaving, primed), 5, "check_pulse", reset=True)
+        kept = checked.tag.x >= checked.d
         if p.lr_threshold is not None:
-            kept = kept & keeps(entry3.d, partner, p.lr_threshold)
+            kept = kept & keeps(checked.d, partner, p.lr_threshold)
         m.d.sync += [
             self.retire.eq(stage[0]),
-            self.produce.eq(stage[0] & stage[1] & self._in_frame(entry3.tag)),
-            self.valid.eq(kept & (entry3.tag.x >= p.first_valid_column)),
-            self.disparity_out.eq(entry3.d),
-            self.x.eq(entry3.tag.x), self.y.eq(entry3.tag.y),
+            self.produce.eq(stage[0] & stage[1] & self._in_frame(checked.tag)),
+            self.valid.eq(kept & (checked.tag.x >= p.first_valid_column)),
+            self.disparity_out.eq(checked.d),
+            self.x.eq(checked.tag.x), self.y.eq(checked.tag.y),
         ]
