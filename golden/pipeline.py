@@ -19,7 +19,7 @@ from .lr_check import invalidate_border, lr_check
 from .matching_cost import cost_dtype, matching_costs
 from ..params import ParameterError
 from .transform import transform
-from .wta import RightWTA, evaluate_partitions, wta_partition
+from .wta import RightWTA, evaluate_partitions, partition_disparities, wta_partition
 
 __all__ = ["disparity_map", "DisparityResult"]
 
@@ -92,17 +92,17 @@ def _match_band(left_t, right_t, params, band, rows):
     aggregated = np.empty((rows[1] - rows[0], volume.shape[2]), volume.dtype)
     right_wta = RightWTA(aggregated.shape, volume.dtype)
     partition_results = []
-    for k in range(params.rounds):
-        first = k * params.per_round
+    for round_ in range(params.rounds):
+        disparities = partition_disparities(params, round_)
 
         def partition_costs():
-            for d in range(first, first + params.per_round):
+            for d in disparities:
                 summed = aggregate(volume[d], params.aggregation, rows, out=aggregated,
                                    scratch=scratch)
                 right_wta.update(summed, d)
                 yield summed
 
-        partition_results.append(wta_partition(partition_costs(), first))
+        partition_results.append(wta_partition(partition_costs(), disparities))
     return evaluate_partitions(partition_results), right_wta.best_disparity
 
 

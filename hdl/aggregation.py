@@ -1,19 +1,17 @@
-"""Aggregation in hardware: the A x A box sum of matching costs (the paper's 3 x 3).
+"""Aggregation in hardware: the A x A box sum of the matching costs (the paper's 3 x 3).
 
-Hardware counterpart of :func:`npstereo.golden.aggregation.aggregate`. Costs arrive one
-(position, round) per ``en``-high clock, positions in raster order and R rounds each, the
-D/R costs of the round's disparities side by side.
+Hardware counterpart of :func:`npstereo.golden.aggregation.aggregate`. Each of the D/R cost
+units delivers, in round j of a slot, the cost of its disparity i*R + j at the newest
+position. The sum over the A rows is done before this stage when the rows above are kept as
+transformed pixels (``params.stored_rows == "transforms"``: the cost units compute A costs);
+when they are kept as costs, a block RAM per unit holds the A-1 rows above (vertical sum
+here). The sum over the A columns takes, for each round, the vertical sums of the 2a
+previous positions from a store of R words per unit (LUT RAM, one word per round), so the
+stage never stalls and bubbles simply do not write. Rows and columns outside the frame are
+masked from the tag, never from memory contents.
 
-- Vertical: a :class:`~amaranth.lib.memory.Memory` of depth W*R holds the previous A-1
-  rows' costs of every (column, round), read-modify-write every clock; the column sum
-  covers rows y - 2a .. y and is reported for the centre row y - a.
-- Horizontal: delay lines of R clocks hold the column sums of the 2a previous positions;
-  the row sum covers columns x - 2a .. x and is reported for the centre column x - a.
-
-Positions outside the image contribute 0, as in the golden model: rows above the frame and
-columns beyond its left and right edges are masked from the tags, never from what the
-memory or the delay lines held before (stale contents of a previous frame or of a reset in
-mid-frame). Rows below the frame arrive with costs 0 from the caller.
+The result is the aggregated cost S of the *centre* position, a rows and a columns behind
+the newest one.
 """
 
 from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
@@ -21,131 +19,148 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import column_inside, delay, tag_layout
-from .plan import aggregation_latency
+from .common import SlotClock, Store, bits_for, column_inside, pipe, tag_layout
+from .plan import VERTICAL_CLOCKS, aggregation_latency, vertical_bits
+from .trees import DEFAULT_EVERY, build_sum, register_plan
 
 __all__ = ["Aggregation"]
 
 
-def _row_inside(y, above):
-    """The stored row ``above`` + 1 rows above row ``y`` lies inside the frame."""
-    return y - 1 - above >= 0
+def _row_inside(y, above, height):
+    """The row ``above`` rows above the newest row ``y`` lies in the frame."""
+    return (y >= above) & (y < height + above)
 
 
 class Aggregation(wiring.Component):
-    """A x A sums of one (position, round) per ``en``-high clock.
+    """Box sums of the round's D/R disparities, for the centre of the aggregation window.
 
     Parameters
     ----------
     params : StereoParams
-        Its ``width`` sizes the cost line buffer (W * R words) and bounds the columns.
+    every : int
+        Register spacing of the adder trees (see :mod:`.trees`).
 
     Attributes
     ----------
-    costs : In(ArrayLayout(unsigned(cost_bits), D/R))
-        C(x, y, tag_in.round * D/R + i), 0 where the caller's masks say so (x - d < 0,
-        rows below the frame).
-    tag_in : In(tag_layout)
-        Position and round of ``costs``.
-    en : In(1)
+    costs : In(ArrayLayout(unsigned(bits), D/R))
+        Per unit, the newest position's cost (``stored_rows == "costs"``: one row, masked
+        where x - d < 0 or outside the frame) or vertical sum (``"transforms"``).
+    tag : In(tag_layout)
+        The newest position, slot-aligned at this stage's input.
+    first, round : In
+        Slot timing at the input.
     sums : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
-        S(x, y, tag.round * D/R + i).
-    tag : Out(tag_layout)
-        The position of ``sums``: the centre of the window whose newest costs entered
-        ``latency`` clocks earlier, a rows and a columns behind them
-        (:func:`~.plan.aggregation_offset`).
+        S(centre, d) for unit i's disparity d = i*R + round.
+    centre : Out(tag_layout)
+        The aggregation window's centre, slot-aligned at the output.
     latency : int
-        Register stages from ``costs`` to ``sums`` (:func:`~.plan.aggregation_latency`);
-        0 for A = 1, where ``sums`` and ``tag`` are the inputs.
+        Clocks from input to output.
     """
 
-    def __init__(self, params):
-        self.params = params
-        self.latency = aggregation_latency(params)
+    def __init__(self, params, every=DEFAULT_EVERY):
+        self.params, self.every = params, every
+        a = params.agg_radius
+        self.from_costs = a > 0 and params.stored_rows == "costs"
+        in_bits = params.cost_bits if a == 0 or self.from_costs else vertical_bits(params)
+        self.vertical_latency = VERTICAL_CLOCKS if self.from_costs else 0
+        self.latency = aggregation_latency(params, every)
+        self.horizontal_latency = self.latency - self.vertical_latency
+        units = params.per_round
         super().__init__({
-            "costs": In(data.ArrayLayout(unsigned(params.cost_bits), params.per_round)),
-            "tag_in": In(tag_layout(params)),
-            "en": In(1),
-            "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits),
-                                         params.per_round)),
-            "tag": Out(tag_layout(params)),
+            "costs": In(data.ArrayLayout(unsigned(in_bits), units)),
+            "tag": In(tag_layout(params)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
+            "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
+            "centre": Out(tag_layout(params)),
         })
 
     def elaborate(self, platform):
+        p = self.params
         m = Module()
-        costs = [self.costs[i] for i in range(self.params.per_round)]
-        if self.params.agg_radius == 0:
-            m.d.comb += [self.tag.eq(self.tag_in)]
-            m.d.comb += [self.sums[i].eq(c) for i, c in enumerate(costs)]
-            return m
-        vertical, vertical_tag = self._vertical(m, costs, self.tag_in)
-        summed, summed_tag = self._horizontal(m, vertical, vertical_tag)
-        m.d.comb += [self.tag.eq(summed_tag)]
-        m.d.comb += [self.sums[i].eq(s) for i, s in enumerate(summed)]
+        slots = SlotClock(m, self.first, self.round, p.rounds, "aggregation")
+        values = [self.costs[i] for i in range(p.per_round)]
+        tag = self.tag
+        if self.from_costs:
+            values = self._vertical(m, slots, values)
+            tag = slots.delay(tag, 0, self.vertical_latency, "vertical_tag")
+        if p.agg_radius:
+            values, tag = self._horizontal(m, slots, values, tag, self.vertical_latency)
+        m.d.comb += [self.sums[i].eq(v) for i, v in enumerate(values)]
+        m.d.comb += self.centre.eq(tag)
         return m
 
-    def _vertical(self, m, costs, tag):
-        """Column sums over rows y - 2a .. y, reported for the centre row y - a."""
+    def _vertical(self, m, slots, costs):
+        """Column sums over rows y - 2a .. y from a block RAM of the A-1 rows above.
+
+        Word (x, j) of unit i's memory (address x*R + j) holds the costs of disparity
+        i*R + j at column x for the A-1 rows above; every round reads it and writes it
+        back shifted by one row. A column's word is read again only a row later, long
+        after the write-back (three clocks after the read), and never in the clock it is
+        written: no collision logic (no_rw_check).
+        """
         p = self.params
-        a = p.agg_radius
-        rows, bits, per_round = 2 * a, p.cost_bits, p.per_round
-        m.submodules.cost_lines = lines = Memory(
-            shape=unsigned(rows * per_round * bits), depth=p.width * p.rounds, init=[])
-        rd = lines.read_port(domain="sync")
-        wr = lines.write_port()
-        # Four registers, for the clock: the address (it fans out to every block RAM of
-        # the buffer), the block RAM's read register, its data again (the RAM's
-        # clock-to-output alone is a third of a cycle), and the column sums, so that
-        # neither the RAM nor the adders reach into the horizontal sum. The write-back
-        # lands two clocks after the read; the same address is read again only a row
-        # (W * R clocks > 2) later, so no read can see a stale word.
-        address = delay(m, self.en, tag.x * p.rounds + tag.round, 1, "cost_lines_address")
-        m.d.comb += [rd.addr.eq(address), rd.en.eq(self.en)]
-        read = delay(m, self.en, rd.data, 1, "cost_lines_data")
-        held = [delay(m, self.en, c, 3, f"vertical_in{i}") for i, c in enumerate(costs)]
-        held_tag = delay(m, self.en, tag, 3, "vertical_tag")
-
-        def stored(row, i):  # row 0 = the row above held_tag.y
-            start = (row * per_round + i) * bits
-            return read[start:start + bits]
-
+        rows, bits, rounds = p.aggregation - 1, p.cost_bits, p.rounds
+        tag = self.tag
+        # x * R without a multiplier: consecutive positions are raster-continuous (x + 1,
+        # or 0 at a line start), so the row base advances by R per position.
+        base = Signal(range(p.width * rounds), name="cost_lines_base")
+        with m.If(slots.first(0) & tag.valid):
+            m.d.sync += base.eq(Mux(tag.x == 0, 0, base + rounds))
+        address = Signal(range(p.width * rounds), name="cost_lines_address")
+        m.d.sync += address.eq(base + slots.round(1))
+        # Every row of the sum is masked here, the newest too: the costs are stored as
+        # computed, for the rows below may belong to the next frame (see the calculation
+        # stage).
+        inside = [Signal(name=f"row_ok{k}") for k in range(rows + 1)]
+        m.d.sync += [ok.eq(_row_inside(tag.y, k, p.height)) for k, ok in enumerate(inside)]
+        inside = [slots.delay(ok, 1, 3, f"row_ok{k}", reset_less=True)
+                  for k, ok in enumerate(inside)]
+        reading = slots.delay(tag.valid, 0, 2, "cost_lines_reading")
+        written = slots.delay(reading, 2, 2, "cost_lines_written")
         sums = []
-        for i in range(per_round):
-            total = held[i]
-            for row in range(rows):
-                total = total + Mux(_row_inside(held_tag.y, row), stored(row, i), 0)
-            sums.append(total)
-        m.d.comb += [
-            wr.addr.eq(delay(m, self.en, address, 2, "cost_lines_write_address")),
-            wr.en.eq(self.en),
-            wr.data.eq(Cat(*held, *[stored(row, i) for row in range(rows - 1)
-                                    for i in range(per_round)])),
-        ]
-        registered = [Signal(len(total), name=f"vertical{i}") for i, total in enumerate(sums)]
-        out_tag = Signal(tag_layout(p))
-        with m.If(self.en):
-            m.d.sync += [r.eq(total) for r, total in zip(registered, sums)]
-            m.d.sync += [out_tag.eq(held_tag), out_tag.y.eq(held_tag.y - a)]
-        return registered, out_tag
+        for i, cost in enumerate(costs):
+            m.submodules[f"cost_lines{i}"] = lines = Memory(
+                shape=unsigned(rows * bits), depth=p.width * rounds, init=[],
+                attrs={"no_rw_check": 1})
+            read, write = lines.read_port(domain="sync"), lines.write_port()
+            m.d.comb += [read.addr.eq(address), read.en.eq(reading)]
+            stored_word = pipe(m, read.data, 1, f"cost_lines{i}_read")
+            stored = [stored_word[k * bits:(k + 1) * bits] for k in range(rows)]
+            newest = pipe(m, cost, 4, f"vertical_in{i}")
+            m.d.comb += [write.addr.eq(pipe(m, address, 2, f"cost_lines{i}_write_address")),
+                         write.en.eq(written),
+                         write.data.eq(Cat(newest, *stored[:rows - 1]))]
+            total = sum(Mux(ok, row, 0) for ok, row in zip(inside, [newest, *stored]))
+            sums.append(pipe(m, total[:vertical_bits(p)], 1, f"vertical{i}"))
+        return sums
 
-    def _horizontal(self, m, vertical, tag):
-        """Row sums over the positions x - 2a .. x, reported (registered) for x - a."""
+    def _horizontal(self, m, slots, values, tag, offset):
+        """Row sums over the positions x - 2a .. x, reported for the centre x - a."""
         p = self.params
-        a, rounds = p.agg_radius, p.rounds
-        taps = [Cat(*vertical)]
-        for k in range(1, 2 * a + 1):
-            taps.append(delay(m, self.en, taps[-1], rounds, f"row_tap{k}"))
-        centre = delay(m, self.en, tag, a * rounds, "row_centre")
-        bits = len(vertical[0])
-        sums = [Signal(p.aggregated_cost_bits, name=f"aggregated{i}")
-                for i in range(p.per_round)]
-        out_tag = Signal(tag_layout(p))
-        terms = [[] for _ in range(p.per_round)]
-        for k, tap in enumerate(taps):
-            inside = column_inside(centre.x, a - k, p.width)  # tap k: column x_centre + a - k
-            for i in range(p.per_round):
-                terms[i].append(Mux(inside, tap[bits * i:bits * (i + 1)], 0))
-        with m.If(self.en):
-            m.d.sync += [s.eq(sum(t)) for s, t in zip(sums, terms)]
-            m.d.sync += out_tag.eq(centre)
+        a, width, rounds = p.agg_radius, p.width, p.rounds
+        bits = len(values[0])
+        # The centre trails the newest position by a columns (a row earlier near a line
+        # start); it is the output tag, a rows up as well.
+        newest_x = tag.x
+        centre = Signal(tag_layout(p), name="aggregation_centre")
+        wraps = newest_x < a
+        m.d.comb += [centre.eq(tag),
+                     centre.x.eq(Mux(wraps, newest_x + width - a, newest_x - a)),
+                     centre.y.eq(Mux(wraps, tag.y - a - 1, tag.y - a))]
+        # Tap k holds column x_newest - k, i.e. the centre's column + (a - k).
+        keep = [Signal(name=f"column_ok{k}") for k in range(2 * a + 1)]
+        m.d.sync += [ok.eq(column_inside(centre.x, a - k, width)) for k, ok in enumerate(keep)]
+        sums = []
+        for i, value in enumerate(values):
+            taps = Store(m, f"row_taps{i}", unsigned(2 * a * bits), rounds)
+            round_ = slots.round(offset)
+            word = taps.read(round_)
+            older = [word[k * bits:(k + 1) * bits] for k in range(2 * a)]
+            taps.write(round_, Cat(value, *older[:2 * a - 1]), tag.valid)
+            registered = pipe(m, Cat(value, *older), 1, f"row_taps{i}")
+            terms = [Mux(keep[k], registered[k * bits:(k + 1) * bits], 0)
+                     for k in range(2 * a + 1)]
+            total = build_sum(m, 1, terms, register_plan(len(terms), self.every, 0, True))
+            sums.append(total[:p.aggregated_cost_bits])
+        out_tag = slots.delay(centre, offset, self.horizontal_latency, "centre_tag")
         return sums, out_tag

@@ -2,28 +2,40 @@
 
 Hardware counterpart of :mod:`npstereo.golden.transform`, :mod:`~npstereo.golden.matching_cost`,
 :mod:`~npstereo.golden.aggregation` and :func:`npstereo.golden.wta.wta_partition`, in that
-order. Each position takes R clocks (rounds); round j evaluates disparities
-j*D/R .. (j+1)*D/R - 1 on the same D/R matching-cost units.
+order. A position takes a slot of R clocks (rounds); D/R cost units work in every round.
 
-- One left and one right :class:`~.transform.Transform` per position.
-- The right transforms of the last D positions sit in a ring of registers. Between rounds
-  the ring rotates by D/R, so cost unit i always reads ring slot i (no R:1 multiplexers);
-  the last round rotates by D/R - 1 and inserts the new right transform.
-- Costs are 0 where x - d < 0 or the position lies outside the frame.
-- :class:`~.aggregation.Aggregation` sums them over A x A positions.
-- WTA per partition: :class:`~.trees.MinTree`, ties to the lowest disparity.
+**Round j evaluates disparities j*D/R .. (j+1)*D/R - 1; cost unit i takes j*D/R + i** (the
+paper's partitions). Unit i therefore needs, in round j, the right-image transform of
+column x - j*D/R - i, and at the next position the same columns shifted by one: the word
+unit i reads in round j is the word unit i + 1 needs in round j of the next position. Each
+unit keeps its R words in a store of R words of LUT RAM (one read and one write per clock,
+the write to the word just read), and hands every word it reads to the next unit; the last
+unit's words go round to unit 0 one round later, and the newest column enters unit 0 in
+round R-1. Only one word per unit moves per clock, between neighbours (and round the ring):
+this replaces a ring of D registers rotating through wide multiplexers, whose wiring kept
+census 9x9 from routing and whose flip-flops made the extended census too big.
+
+For the vertical aggregation the stage either computes the costs of the A rows of the window
+(``params.stored_rows == "transforms"``: the transforms of the A-1 rows above come from a
+block RAM of transformed pixels, one word per column, and travel through the stores with
+the current row's) or hands single-row costs to :class:`~.aggregation.Aggregation`, which
+keeps the costs of the rows above (``"costs"``).
+
+The datapath never stalls (no clock enable): each value carries the tag of its slot, and
+only the stores are written, only in slots that carry a position.
 """
 
-from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .aggregation import Aggregation
-from .common import bits_for, delay, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import calculation_latency
+from .plan import calculation_timing, cost_rows, min_tree_plan, vertical_bits
 from .transform import Transform
-from .trees import DEFAULT_EVERY, MinTree
+from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
 
 __all__ = ["CalculationStage"]
 
@@ -35,103 +47,217 @@ class CalculationStage(wiring.Component):
     ----------
     params : StereoParams
     every : int
-        Register spacing of the transform, cost and minimum trees (see :mod:`.trees`).
+        Register spacing of the transform, cost and adder/minimum trees (see :mod:`.trees`).
 
     Attributes
     ----------
     window_left, window_right : In(ArrayLayout(unsigned(8), B * B))
-        From the input stage; change only with a position-advancing ``en``.
-    tag_in : In(tag_layout)
+        From the input stage, slot-aligned at this stage's input.
+    tag : In(tag_layout)
         Centre of those windows.
-    en : In(1)
-        One clock of the pipeline (one round).
-    round : In(range(R))
-        Round of this clock; the input stage advances on ``en`` in round R-1.
-    costs : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
-        S(x, y, round * D/R + i) for unit i.
+    first, round : In
+        Slot timing at the input.
+    sums : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
+        S(centre, i*R + round) of unit i, at offset ``sums_latency``.
+    centre : Out(tag_layout)
+        The aggregation centre of ``sums``, slot-aligned at ``sums_latency``.
     best_cost, best_disparity : Out
-        The partition's winner.
-    tag : Out(tag_layout)
-        Position (centre of the aggregation window) and round of the outputs.
-    latency : (int, int)
-        ``(positions, clocks)`` (:func:`~.plan.calculation_latency`): whole positions from
-        the window to the cost units' inputs, then clocks to the outputs of the same round.
+        The partition winner of the round, at offset ``latency``.
+    sums_latency, latency : int
+        Clocks from the input to ``sums`` and to the partition winner.
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
-        self.params = params
+        self.params, self.every = params, every
         self.transform_left = Transform(params, every)
         self.transform_right = Transform(params, every)
-        self.cost_units = [MatchingCost(params, every) for _ in range(params.per_round)]
-        self.aggregation = Aggregation(params)
-        self.min_tree = MinTree(params.per_round, params.aggregated_cost_bits, every)
-        self.latency = calculation_latency(params, every)
+        a = params.agg_radius
+        #: Rows whose costs the cost units compute: A with stored transforms, else 1.
+        self.rows = cost_rows(params)
+        self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
+                           for _ in range(params.per_round)]
+        self.aggregation = Aggregation(params, every)
+        timing = calculation_timing(params, every)
+        # Offsets (clocks after the input) of the datapath's steps; see elaborate().
+        self.transformed, self.stored = timing.transformed, timing.stored
+        self.costed, self.vertical = timing.costed, timing.vertical
+        self.sums_latency, self.min_latency = timing.sums, timing.min_tree
+        self.latency = timing.latency
+        units = params.per_round
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
         super().__init__({
             "window_left": In(window), "window_right": In(window),
-            "tag_in": In(tag_layout(params)),
-            "en": In(1),
-            "round": In(bits_for(params.rounds - 1)),
-            "costs": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits),
-                                          params.per_round)),
+            "tag": In(tag_layout(params)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
+            "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
+            "centre": Out(tag_layout(params)),
             "best_cost": Out(params.aggregated_cost_bits),
             "best_disparity": Out(bits_for(params.disparities - 1)),
-            "tag": Out(tag_layout(params)),
         })
 
     def elaborate(self, platform):
         p = self.params
         m = Module()
-        rounds, per_round, depth = p.rounds, p.per_round, p.disparities
-        advance = self.en & (self.round == rounds - 1)
+        slots = SlotClock(m, self.first, self.round, p.rounds, "calculation")
 
-        # Transforms advance once per position.
         m.submodules.transform_left = tl = self.transform_left
         m.submodules.transform_right = tr = self.transform_right
         m.d.comb += [tl.window.eq(self.window_left), tr.window.eq(self.window_right),
-                     tl.en.eq(advance), tr.en.eq(advance)]
-        transformed_tag = delay(m, advance, self.tag_in, tl.latency, "transform_tag")
+                     tl.en.eq(1), tr.en.eq(1)]
+        left, right = self._transformed_rows(m, slots, tl.value, tr.value)
+        tag = slots.delay(self.tag, 0, self.transformed, "transformed_tag")
+        right_words = self._right_stores(m, slots, Cat(*right), tag)
+        # The left word reaches the cost units with the stores' read registers.
+        left_word = pipe(m, Cat(*left), 2, "left_word")
+        tag = slots.delay(tag, self.transformed, self.stored + 1 - self.transformed, "cost_tag")
+        costs = self._costs(m, slots, left_word, right_words, tag)
 
-        # Position register and right-transform ring (slot k = TR of the position k back).
-        left = Signal(p.transform_bits)
-        ring = [Signal(p.transform_bits, name=f"ring{k}") for k in range(depth)]
-        position = Signal(tag_layout(p))
-        with m.If(advance):
-            m.d.sync += [left.eq(tl.value), position.eq(transformed_tag),
-                         ring[0].eq(tr.value)]
-            m.d.sync += [ring[k].eq(ring[(k + per_round - 1) % depth])
-                         for k in range(1, depth)]
-        with m.Elif(self.en):
-            m.d.sync += [ring[k].eq(ring[(k + per_round) % depth]) for k in range(depth)]
-        round_tag = Signal(tag_layout(p))
-        m.d.comb += [round_tag.eq(position), round_tag.round.eq(self.round)]
-
-        # Matching costs of the round's disparities, then their A x A sums.
-        for i, unit in enumerate(self.cost_units):
-            m.submodules[f"cost{i}"] = unit
-            m.d.comb += [unit.left.eq(left), unit.right.eq(ring[i]), unit.en.eq(self.en)]
-        cost_tag = delay(m, self.en, round_tag, self.cost_units[0].latency, "cost_tag")
-        inside = (cost_tag.live & (cost_tag.y >= 0) & (cost_tag.y < p.height))
         m.submodules.aggregation = aggregation = self.aggregation
-        m.d.comb += [aggregation.en.eq(self.en), aggregation.tag_in.eq(cost_tag)]
-        for i, unit in enumerate(self.cost_units):
-            disparity = cost_tag.round * per_round + i
-            m.d.comb += aggregation.costs[i].eq(
-                Mux(inside & (cost_tag.x >= disparity), unit.cost, 0))
-        summed = [aggregation.sums[i] for i in range(per_round)]
+        newest = slots.delay(tag, self.stored + 1, self.vertical - self.stored - 1,
+                             "aggregation_tag")
+        m.d.comb += [aggregation.tag.eq(newest), aggregation.first.eq(slots.first(self.vertical)),
+                     aggregation.round.eq(slots.round(self.vertical))]
+        m.d.comb += [aggregation.costs[i].eq(c) for i, c in enumerate(costs)]
+        m.d.comb += [self.sums.eq(aggregation.sums), self.centre.eq(aggregation.centre)]
 
-        # WTA of the partition; costs and tag wait for the tree.
-        m.submodules.min_tree = tree = self.min_tree
-        m.d.comb += [tree.en.eq(self.en)] + [tree.values[i].eq(summed[i])
-                                             for i in range(per_round)]
-        out_tag = delay(m, self.en, aggregation.tag, tree.latency, "wta_tag")
-        out_costs = delay(m, self.en, Cat(*summed), tree.latency, "wta_costs")
-        bits = p.aggregated_cost_bits
-        m.d.comb += [
-            self.tag.eq(out_tag),
-            self.best_cost.eq(tree.min),
-            self.best_disparity.eq(out_tag.round * per_round + tree.index),
-        ]
-        m.d.comb += [self.costs[i].eq(out_costs[bits * i:bits * (i + 1)])
-                     for i in range(per_round)]
+        # WTA of the partition: unit i's leaf carries i, to which the round's first disparity
+        # j*D/R is added at the root (ties keep the lowest unit, i.e. the lowest disparity).
+        index_shape = unsigned(bits_for(p.per_round - 1))
+        leaves = [(aggregation.sums[i], Const(i, index_shape)) for i in range(p.per_round)]
+        best_cost, best_unit = build_tree(m, 1, leaves, select_min, min_tree_plan(p, self.every))
+        first_disparity = round_base(m, slots, self.sums_latency + self.min_latency,
+                                     p.per_round)
+        m.d.sync += [self.best_cost.eq(best_cost),
+                     self.best_disparity.eq(first_disparity + best_unit)]
         return m
+
+    def _transformed_rows(self, m, slots, left, right):
+        """The transforms of the rows of the aggregation window, slot-aligned at
+        ``self.transformed``: the current row (from the transform units), then the rows
+        above (from a block RAM of transformed pixels, when the rows are recomputed)."""
+        p = self.params
+        delay = self.transformed - self.transform_left.latency
+        left, right = (pipe(m, left, delay, "left_current"),
+                       pipe(m, right, delay, "right_current"))
+        if self.rows == 1:
+            return [left], [right]
+        above, bits = self.rows - 1, p.transform_bits
+        m.submodules.transform_lines = lines = Memory(
+            shape=unsigned(2 * above * bits), depth=p.width, init=[],
+            attrs={"no_rw_check": 1})
+        read, write = lines.read_port(domain="sync"), lines.write_port()
+        # Read the position's column in round 0 of slots with a position (the word then
+        # stays on the read port); two clocks later the word has left the block RAM and the plain
+        # register behind it (the RAM's own output register on ECP5). The write-back of a
+        # column comes `transformed` clocks after its read, and the column is read again a
+        # row later: no collision logic (no_rw_check).
+        m.d.comb += [read.addr.eq(self.tag.x), read.en.eq(slots.first(0) & self.tag.valid)]
+        word = pipe(m, read.data, 1, "transform_lines_read")
+        word = pipe(m, word, self.transformed - 2, "transform_lines_word")
+        left_above = [word[k * bits:(k + 1) * bits] for k in range(above)]
+        right_above = [word[(above + k) * bits:(above + k + 1) * bits] for k in range(above)]
+        tag = slots.delay(self.tag, 0, self.transformed, "transform_lines_tag")
+        m.d.comb += [write.addr.eq(tag.x), write.en.eq(slots.first(self.transformed) & tag.valid),
+                     write.data.eq(Cat(left, *left_above[:above - 1],
+                                       right, *right_above[:above - 1]))]
+        return [left, *left_above], [right, *right_above]
+
+    def _right_stores(self, m, slots, newest, tag):
+        """Each unit's R right-image words; returns the units' read registers.
+
+        In round j unit i reads the word of column x - j*D/R - i (a register later it is
+        the unit's operand) and, in a slot with a position, writes it into unit i + 1 at
+        the same place for the next position (the LUT RAM's read is asynchronous, the
+        write lands at the clock edge). Unit 0 takes the last unit's word of round j as its
+        word j + 1, and in round R-1 the newest column as its word 0; so that this never
+        overwrites a word it has still to read, unit 0's words rotate by one place per
+        position. ``tag`` is slot-aligned at ``self.transformed``: the newest column's
+        slot, which begins in the clock after round R-1.
+        """
+        p = self.params
+        rounds, units, bits = p.rounds, p.per_round, len(newest)
+        round_ = slots.round(self.stored)
+        last_round = slots.first(self.transformed)          # round R-1 of the stores
+        current = slots.delay(tag, self.transformed, 1, "store_tag")   # slot in its rounds
+        moving = current.valid
+        entering = last_round & tag.valid                   # the newest column comes in
+        if rounds == 1:
+            address0 = write0_enable = Const(0)
+        else:
+            # Unit 0's word j lives at (base + j) mod R; base steps back one place per
+            # position, so word j + 1 of the next position lands where word j was read,
+            # and in round R-1 the newest word lands on the next position's base. The
+            # address and the write enable reach the LUT RAM straight from registers
+            # (each drives a whole word of RAM cells), loaded a clock ahead.
+            base = Signal(range(rounds), name="store0_base")
+            address0 = Signal(range(rounds), name="store0_address")
+            write0_enable = Signal(name="store0_write")
+            stepped = Mux(base == 0, rounds - 1, base - 1)
+            following = Mux(moving, stepped, base)       # the next position's base
+            before_last = slots.first(self.transformed - 1)
+            coming = slots.delay(self.tag, 0, self.transformed - 1, "store_next_tag")
+            with m.If(last_round):
+                m.d.sync += base.eq(following)
+            with m.If(before_last | last_round):
+                m.d.sync += address0.eq(following)
+            with m.Else():
+                m.d.sync += address0.eq(Mux(address0 == rounds - 1, 0, address0 + 1))
+            m.d.sync += write0_enable.eq(Mux(before_last, coming.valid,
+                                             Mux(last_round, tag.valid, moving)))
+        words, operands = [], []
+        stores = [Store(m, f"right_store{i}", unsigned(bits), rounds) for i in range(units)]
+        for i, store in enumerate(stores):
+            words.append(store.read(address0 if i == 0 else round_))
+            operands.append(pipe(m, words[-1], 1, f"right_operand{i}"))
+        for i, store in enumerate(stores):
+            if i:
+                store.write(round_, words[i - 1], moving)
+            elif rounds == 1:
+                store.write(0, newest, entering)
+            else:
+                store.write(address0, Mux(last_round, newest, words[-1]), write0_enable)
+        return operands
+
+    def _costs(self, m, slots, left_word, right_words, tag):
+        """Masked costs (or vertical sums of A rows) per unit, at offset ``self.vertical``.
+
+        ``tag`` is slot-aligned at ``self.stored + 1``, where the operands are. A cost is 0
+        where x - d < 0, where its row lies outside the frame, and in slots without a
+        position.
+        """
+        p = self.params
+        start = self.stored + 1
+        bits = p.transform_bits
+        # x - j*D/R once, then one constant comparison per unit: x - d >= 0 <=> x - j*D/R >= i.
+        x_minus_round = Signal(range(-p.disparities, p.width), name="x_minus_round")
+        m.d.sync += x_minus_round.eq(tag.x - round_base(m, slots, start, p.per_round))
+        rows_ok = []
+        for k in range(self.rows):
+            ok = Signal(name=f"cost_row_ok{k}")
+            if self.aggregation.from_costs:
+                # The row's cost is stored for the rows below it, which may already belong
+                # to the next frame (frames overlap): it is stored unmasked by the frame,
+                # and the aggregation masks the rows of each sum.
+                m.d.sync += ok.eq(tag.valid & tag.live)
+            else:
+                m.d.sync += ok.eq(tag.valid & tag.live & (tag.y >= k) & (tag.y < p.height + k))
+            rows_ok.append(pipe(m, ok, self.costed - start - 1, f"cost_row_ok{k}"))
+        masked = []
+        for i, units in enumerate(self.cost_units):
+            in_row = Signal(name=f"in_row{i}")
+            m.d.sync += in_row.eq(x_minus_round >= i)
+            in_row = pipe(m, in_row, self.costed - start - 2, f"in_row{i}")
+            row_costs = []
+            for k, unit in enumerate(units):
+                m.submodules[f"cost{i}_row{k}"] = unit
+                m.d.comb += [unit.left.eq(left_word[k * bits:(k + 1) * bits]),
+                             unit.right.eq(right_words[i][k * bits:(k + 1) * bits]),
+                             unit.en.eq(1)]
+                cost = pipe(m, unit.cost, self.costed - start - unit.latency, f"cost{i}_{k}")
+                row_costs.append(Mux(in_row & rows_ok[k], cost, 0))
+            if self.rows > 1:
+                total = build_sum(m, 1, row_costs, register_plan(self.rows, self.every, 0, True))
+                masked.append(total[:vertical_bits(p)])
+            else:
+                masked.append(pipe(m, row_costs[0], 1, f"masked_cost{i}"))
+        return masked

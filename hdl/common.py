@@ -1,18 +1,26 @@
-"""Pieces shared by the pipeline stages: the position tag, enable-gated delay lines, and the
-two primitives several stages compute (the WTA's tie rule and the absolute difference).
+"""Pieces shared by the pipeline stages: position tags, slot timing and free-running delays.
 
-Every stage carries, next to its data, the *tag* of the position the data belongs to
-(centre column ``x``, row ``y``, calculation ``round`` and ``live``). Stages derive every
-border mask from the tag instead of relying on what their registers or memories held
-before, so stale contents (previous frame, reset in mid-frame, dummy flush positions)
-can never leak into a result.
+The core never stalls: every register of the datapath loads every clock. Time is cut into
+*slots* of R clocks (round 0 .. R-1); a slot either carries a *position* (a pixel, or a
+dummy position while a frame is completed or flushed) or is a bubble. Every stage carries,
+next to its data, the *tag* of the slot its data belongs to (centre column ``x``, row ``y``,
+``valid``: the slot carries a position, ``live``: the tag names a real position since
+reset). Stages derive every border mask from the tag, never
+from what their registers or memories held before, so stale contents (previous frame,
+reset in mid-frame, flush positions, bubbles) never reach a result. Only state that
+belongs to positions (line buffers, stores of earlier positions) is written, and only in
+slots whose tag is ``valid``: bubbles leave it untouched.
+
+A value that belongs to a slot (a tag, a transformed pixel) is *slot-aligned at offset o*:
+it holds the slot's value during the R clocks from o clocks after the slot's first clock.
 """
 
-from amaranth.hdl import Mux, Signal, signed, unsigned
+from amaranth.hdl import Const, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import data
+from amaranth.lib.memory import Memory
 
-__all__ = ["bits_for", "tag_layout", "delay", "y_range", "column_inside", "better",
-           "absolute_difference"]
+__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "delay", "round_base", "SlotClock", "Store",
+           "column_inside", "better", "absolute_difference"]
 
 
 def bits_for(maximum):
@@ -28,31 +36,168 @@ def y_range(params):
     few rows below the frame, where no stage needs them any more.
     """
     r, a, width = params.radius, params.agg_radius, params.width
-    lowest = -(r * width + r) // width - a
+    lowest = -(r * width + r) // width - a - 1
     highest = params.height + a + 1
     return lowest, highest
 
 
 def tag_layout(params):
-    """Layout of a position tag; ``live`` is 0 for positions never produced since reset."""
+    """Layout of a slot's tag."""
     lowest, highest = y_range(params)
     y_bits = max(abs(lowest), highest).bit_length() + 1
     return data.StructLayout({
         "x": unsigned(bits_for(params.width - 1)),
         "y": signed(y_bits),
-        "round": unsigned(bits_for(params.rounds - 1)),
+        "valid": unsigned(1),
         "live": unsigned(1),
     })
 
 
-def delay(m, en, value, steps, name):
-    """``value`` delayed by ``steps`` ``en``-high clocks (a shift register; 0 steps: itself)."""
+def pipe(m, value, steps, name, reset=False):
+    """``value`` delayed by ``steps`` clocks: a free-running shift register.
+
+    Datapath registers have no reset (``reset=False``): nothing downstream trusts their
+    contents without a valid tag, and a reset net reaching every one of them would only
+    cost routing. Control bits that start writes or count positions must be reset, or a
+    pulse in flight before a reset would come out after it.
+    """
+    if len(Value.cast(value)) == 0:
+        return value
     for step in range(steps):
-        reg = Signal(value.shape(), name=f"{name}_d{step}")
+        reg = Signal(value.shape(), name=f"{name}_p{step}", reset_less=not reset)
+        m.d.sync += reg.eq(value)
+        value = reg
+    return value
+
+
+def delay(m, en, value, steps, name):
+    """``value`` delayed by ``steps`` ``en``-high clocks (a shift register without reset;
+    0 steps: itself)."""
+    for step in range(steps):
+        reg = Signal(value.shape(), name=f"{name}_d{step}", reset_less=True)
         with m.If(en):
             m.d.sync += reg.eq(value)
         value = reg
     return value
+
+
+def round_base(m, slots, offset, step):
+    """round * ``step`` at ``offset`` (the round's first disparity), without a multiplier:
+    a register that restarts at 0 with each slot and adds ``step`` every clock."""
+    if slots.rounds == 1:
+        return Const(0)
+    assert offset >= 1, "the counter restarts from the slot pulse a clock ahead"
+    value = Signal(range(slots.rounds * step), name=f"{slots.name}_round_base{offset}")
+    restart = (value == (slots.rounds - 1) * step) | slots.first(offset - 1)
+    m.d.sync += value.eq(Mux(restart, 0, value + step))
+    return value
+
+
+class SlotClock:
+    """Slot timing inside one component: where round 0 of a slot falls, offset by offset.
+
+    Parameters
+    ----------
+    m : Module
+    first : Value
+        1 in the first clock (round 0) of every slot, at the component's input offset.
+    round_ : Value
+        The round at the component's input offset.
+    rounds : int
+        R, the slot length in clocks.
+    name : str
+        Prefix of the registers it creates.
+
+    The pulse is delayed by one shared shift register whose taps are handed out, so any
+    number of users at any offsets cost max(offset) flip-flops in all.
+    """
+
+    def __init__(self, m, first, round_, rounds, name):
+        self.m, self.rounds, self.name = m, rounds, name
+        self._taps = [first]
+        self._rounds = {0: round_}
+
+    def first(self, offset):
+        """1 in round 0 of every slot, ``offset`` clocks after the input offset."""
+        if self.rounds == 1:
+            return Const(1)
+        while len(self._taps) <= offset:
+            tap = Signal(name=f"{self.name}_first{len(self._taps)}")
+            self.m.d.sync += tap.eq(self._taps[-1])
+            self._taps.append(tap)
+        return self._taps[offset]
+
+    def round(self, offset):
+        """The round (0 .. R-1) ``offset`` clocks after the input offset.
+
+        A local counter, cleared by the slot-start pulse a clock ahead, rather than the
+        input's round carried along: a few flip-flops, and no long wires between stages.
+        """
+        if self.rounds == 1:
+            return Const(0)
+        if offset not in self._rounds:
+            counter = Signal(range(self.rounds), name=f"{self.name}_round{offset}")
+            wrap = (counter == self.rounds - 1) | self.first(offset - 1)
+            self.m.d.sync += counter.eq(Mux(wrap, 0, counter + 1))
+            self._rounds[offset] = counter
+        return self._rounds[offset]
+
+    def delay(self, value, start, steps, name, reset_less=False):
+        """A value slot-aligned at ``start`` moved ``steps`` clocks later.
+
+        A latch loaded in clock k of a slot (0 <= k < R) holds the slot's value from
+        clock k + 1 to k + R: one register moves a value by up to R clocks, so the delay
+        costs ceil(steps / R) registers, not ``steps`` (the value is constant for R
+        clocks). Tags keep their reset (their valid bits must clear); data need not.
+        """
+        done = 0
+        while done < steps:
+            jump = min(self.rounds, steps - done)
+            reg = Signal(value.shape(), name=f"{name}_s{start + done + jump}",
+                         reset_less=reset_less)
+            with self.m.If(self.first(start + done + jump - 1)):
+                self.m.d.sync += reg.eq(value)
+            value, done = reg, done + jump
+        return value
+
+
+class Store:
+    """A few words of LUT RAM with an asynchronous read port, or a register for one word.
+
+    Parameters
+    ----------
+    m : Module
+    name : str
+    shape : shape-castable
+        One word.
+    depth : int
+        Words; a depth of 1 (R = 1) is a plain register (a memory would need a 0-bit
+        address, which Verilog cannot declare).
+    """
+
+    def __init__(self, m, name, shape, depth):
+        self.m, self.depth = m, depth
+        if depth > 1:
+            m.submodules[name] = memory = Memory(shape=shape, depth=depth, init=[])
+            self._read, self._write = memory.read_port(domain="comb"), memory.write_port()
+        else:
+            self._word = Signal(shape, name=name, reset_less=True)
+
+    def read(self, address):
+        """The word at ``address`` (combinational)."""
+        if self.depth == 1:
+            return self._word
+        self.m.d.comb += self._read.addr.eq(address)
+        return self._read.data
+
+    def write(self, address, data, enable):
+        """Write ``data`` at ``address`` at the clock edge when ``enable``."""
+        if self.depth == 1:
+            with self.m.If(enable):
+                self.m.d.sync += self._word.eq(data)
+            return
+        self.m.d.comb += [self._write.addr.eq(address), self._write.data.eq(data),
+                          self._write.en.eq(enable)]
 
 
 def column_inside(x, offset, width):
@@ -60,7 +205,7 @@ def column_inside(x, offset, width):
     always in 0 .. W-1 (so only one side can fail, and offset 0 never does)."""
     if offset < 0:
         return x >= -offset
-    return x < width - offset if offset > 0 else 1
+    return x < width - offset if offset > 0 else Const(1)
 
 
 def better(candidate, best):
@@ -68,7 +213,7 @@ def better(candidate, best):
     smaller.
 
     Candidates are visited (or, in a tree, paired) in increasing disparity order, so among
-    equal costs the lowest disparity stays, as in the golden model's ``wta._better``.
+    equal costs the lowest disparity stays, as in the golden model.
     """
     return candidate < best
 

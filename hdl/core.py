@@ -2,30 +2,41 @@
 
 Chains :class:`~.input_stage.InputStage`, :class:`~.calculation_stage.CalculationStage`,
 :class:`~.evaluation_stage.EvaluationStage` and :class:`~.lr_check.LRCheck` (the order of
-:func:`npstereo.golden.pipeline.disparity_map`) under one global enable: every pipeline
-register advances in the same clocks, and a clock advances when the next position is
-available (an input pixel, or a dummy position while the core completes or flushes a
-frame) and the output register can take a word. Each position takes R clocks (rounds);
-the input is taken in the last round.
+:func:`npstereo.golden.pipeline.disparity_map`).
+
+**A pipeline that never stalls.** Time is cut into slots of R clocks; in the last clock of a
+slot the admission logic decides whether the next slot carries a position (the next input
+pixel, or a dummy position while a frame is completed or flushed) or is a bubble. Nothing
+downstream has a clock enable: data flow every clock with the tag of their slot, and only
+state that belongs to positions (line buffers, the stores of earlier positions) is written,
+in slots that carry one. Backpressure is handled at the ports only: the output queue
+(:class:`amaranth.lib.fifo.SyncFIFOBuffered`) is deep enough for every position in flight,
+and a position is admitted only when the queue is sure to have room for its word (a credit
+counter: queue depth minus words queued minus positions in flight). So no signal fans out
+to every register, and no combinational path runs from one port to the other.
 
 Framing (see docs/semantics.md, "Hardware"): IDLE waits for a start of frame and drops
 pixels without one; FRAME takes W x H pixels checking ``tlast``; a framing error (a wrong
 ``tlast``, a start of frame inside a frame) pulses ``framing_error`` and the rest of the
 frame is filled with zero pixels (FILL); FLUSH feeds dummy positions until the frame's last
-output word is out, then IDLE again.
+output word is out, then IDLE again. A start of frame that is waiting at the beginning of a
+flush line is taken at once: the frames overlap in the pipeline (the input stage keeps the
+finishing frame's coordinates for its last centres), so back-to-back frames cost W x H
+slots each, with no flush between them.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, wiring
+from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
 
 from ..params import ParameterError
 from .calculation_stage import CalculationStage
-from .common import bits_for
+from .common import SlotClock, bits_for
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
-from .plan import check_buildable, latency, output_width
+from .plan import check_buildable, core_timing, latency, output_width
 from .trees import DEFAULT_EVERY
 
 __all__ = ["NpStereoCore"]
@@ -40,8 +51,7 @@ class NpStereoCore(wiring.Component):
     Parameters
     ----------
     params : StereoParams
-        Must have ``width`` and ``height`` within the hardware's limits (else
-        :class:`~npstereo.params.ParameterError`, see :func:`~.plan.check_buildable`).
+        Must have ``width`` and ``height`` (else :class:`ParameterError`).
     every : int
         Register spacing of the trees (see :mod:`.trees`).
 
@@ -54,8 +64,10 @@ class NpStereoCore(wiring.Component):
     framing_error : Out(1)
         One-clock pulse per framing error (registered).
     latency : int
-        Positions from a pixel's entry to its output word without stalls
-        (:func:`~.plan.latency`).
+        Positions from a pixel's admission to the position whose admission completes its
+        output word: the flush after the last frame of a stream.
+    clock_latency : int
+        Clocks from the admission of that position to the word entering the output queue.
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
@@ -65,11 +77,18 @@ class NpStereoCore(wiring.Component):
             self._MustUse__silence = True  # never elaborated: no "unused" warning
             raise
         self.params = params
-        self.latency = latency(params, every)
+        timing = core_timing(params, every)
         self.input_stage = InputStage(params)
         self.calculation_stage = CalculationStage(params, every)
         self.evaluation_stage = EvaluationStage(params)
-        self.lr_check = LRCheck(params)
+        # Offsets (clocks after admission) where each stage's input is slot-aligned.
+        self.calculation_at, self.sums_at = timing.calculation, timing.sums
+        self.evaluation_at = timing.evaluation
+        self.lr_check = LRCheck(params, timing.left - timing.sums)
+        self.clock_latency = timing.output
+        #: Output queue depth: every position in flight must find room for its word.
+        self.queue_depth = timing.queue_depth
+        self.latency = latency(params)
         super().__init__({
             "s_axis_tdata": In(16), "s_axis_tvalid": In(1), "s_axis_tready": Out(1),
             "s_axis_tuser": In(1), "s_axis_tlast": In(1),
@@ -87,138 +106,177 @@ class NpStereoCore(wiring.Component):
         m.submodules.evaluation_stage = ev = self.evaluation_stage
         m.submodules.lr_check = lr = self.lr_check
 
-        # Both AXI ports are registered (two-entry queues), and so is the global enable:
-        # ``en`` drives the clock enable of every pipeline register, so it must leave a
-        # flip-flop, not a tree of logic behind the ports. It is computed a clock ahead,
-        # from the next values of everything it depends on (see ``_enable``).
+        # The slot clock: round 0 .. R-1, free-running.
+        round_ = Const(0)
+        if rounds > 1:
+            round_ = Signal(range(rounds), name="round")
+            m.d.sync += round_.eq(Mux(round_ == rounds - 1, 0, round_ + 1))
+        first = Signal(name="slot_first", init=1)
+        m.d.sync += first.eq(round_ == rounds - 1)
+        slots = SlotClock(m, first, round_, rounds, "core")
+        decide = Const(1) if rounds == 1 else round_ == rounds - 1
+
+        # Input: a two-entry register queue (s_axis_tready straight from a register).
         beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
         incoming = Signal(beat)
         m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
                      incoming.last.eq(self.s_axis_tlast)]
         pop = Signal()
-        head, head_valid, next_head, next_head_valid, _ = _queue(
-            m, "in", incoming, self.s_axis_tvalid, pop, self.s_axis_tready)
+        head, head_valid = _queue(m, incoming, self.s_axis_tvalid, pop, self.s_axis_tready)
 
+        # Output: the queue of words, and the credits of positions it can still take.
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
+        m.submodules.out_queue = queue = SyncFIFOBuffered(
+            width=word_layout.size, depth=self.queue_depth)
         word = Signal(word_layout)
-        push_word, pop_word = Signal(), Signal()
-        out_head, out_valid, _, _, out_room_next = _queue(m, "out", word, push_word, pop_word)
-        m.d.comb += [pop_word.eq(out_valid & self.m_axis_tready),
-                     self.m_axis_tvalid.eq(out_valid), self.m_axis_tdata.eq(out_head.data),
-                     self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last)]
-
-        round_ = Signal(bits_for(rounds - 1))
-        next_round = Signal.like(round_)
-        last_round = round_ == rounds - 1
-        px = Signal(range(width))
-        py = Signal(range(height))
-        end_of_line = px == width - 1
-        end_of_frame = end_of_line & (py == height - 1)
-        error = Signal()
-        m.d.sync += self.framing_error.eq(error)
-
-        en = Signal()
-        advance = en & last_round
-        start = Signal()
-        take_pixel = Signal()  # the position is the input pixel (not a dummy zero)
-        m.d.comb += next_round.eq(Mux(en, Mux(last_round, 0, round_ + 1), round_))
-        m.d.sync += round_.eq(next_round)
-
-        with m.If(advance):
-            m.d.sync += [px.eq(Mux(end_of_line, 0, px + 1)),
-                         py.eq(Mux(end_of_line, Mux(end_of_frame, 0, py + 1), py))]
-
-        # An explicit state register and if/else chains rather than m.FSM: Amaranth's FSM
-        # emits partial case statements that Verilator's lint rejects (CASEINCOMPLETE);
-        # and the enable needs the next state as a signal.
-        state = Signal(range(4), name="framing_state")
-        next_state = Signal.like(state)
-        m.d.comb += next_state.eq(state)
-        m.d.sync += state.eq(next_state)
-        idle, frame, fill = (state == n for n in (IDLE, FRAME, FILL))
-        with m.If(idle):
-            m.d.comb += [start.eq(1), take_pixel.eq(1),
-                         pop.eq(head_valid & (~head.user | advance))]
-            with m.If(head_valid & ~head.user):
-                m.d.comb += error.eq(1)
-            with m.If(advance):
-                m.d.sync += [px.eq(1), py.eq(0)]
-                with m.If(head.last):
-                    m.d.comb += [error.eq(1), next_state.eq(FILL)]
-                with m.Else():
-                    m.d.comb += next_state.eq(FRAME)
-        with m.Elif(frame):
-            m.d.comb += [take_pixel.eq(1), pop.eq(advance)]
-            with m.If(head_valid & head.user):
-                m.d.comb += [error.eq(1), next_state.eq(FILL)]
-            with m.Elif(advance):
-                with m.If(head.last != end_of_line):
-                    m.d.comb += error.eq(1)
-                with m.If(end_of_frame):
-                    m.d.comb += next_state.eq(FLUSH)
-                with m.Elif(head.last != end_of_line):
-                    m.d.comb += next_state.eq(FILL)
-        with m.Elif(fill):
-            with m.If(advance & end_of_frame):
-                m.d.comb += next_state.eq(FLUSH)
-        with m.Else():  # FLUSH
-            with m.If(en & lr.produce & (lr.x == width - 1) & (lr.y == height - 1)):
-                m.d.comb += next_state.eq(IDLE)
-
-        m.d.sync += en.eq(_enable(next_state, next_round == rounds - 1, next_head_valid,
-                                  next_head.user, out_room_next))
-
+        out_head = Signal(word_layout)
         m.d.comb += [
-            inp.left.eq(Mux(take_pixel, head.data[:8], 0)),
-            inp.right.eq(Mux(take_pixel, head.data[8:], 0)),
-            inp.advance.eq(advance), inp.start.eq(start),
-            calc.window_left.eq(inp.window_left), calc.window_right.eq(inp.window_right),
-            calc.tag_in.eq(inp.tag), calc.en.eq(en), calc.round.eq(round_),
-            ev.en.eq(en), ev.cost.eq(calc.best_cost), ev.disparity.eq(calc.best_disparity),
-            ev.tag.eq(calc.tag),
-            lr.en.eq(en), lr.costs.eq(calc.costs), lr.tag.eq(calc.tag),
-            lr.disparity.eq(ev.disparity_out), lr.done.eq(ev.done),
-        ]
-
-        m.d.comb += [
-            push_word.eq(en & lr.produce),
+            queue.w_en.eq(lr.produce), queue.w_data.eq(word),
+            out_head.eq(queue.r_data), queue.r_en.eq(self.m_axis_tready),
+            self.m_axis_tvalid.eq(queue.r_rdy), self.m_axis_tdata.eq(out_head.data),
+            self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last),
             word.data.eq(Cat(Mux(lr.valid, lr.disparity_out, 0),
                              Const(0, output_width(p) - 1 - len(lr.disparity_out)), lr.valid)),
             word.user.eq((lr.x == 0) & (lr.y == 0)),
             word.last.eq(lr.x == width - 1),
         ]
+        admit = Signal()        # the decision of this clock: the next slot has a position
+        credits = Signal(range(self.queue_depth + 1), init=self.queue_depth)
+        has_credit = Signal(init=1)
+        # Credits come back when a word leaves the queue or a position retires without
+        # one. Both sums (with and without this clock's admission) are formed beside the
+        # admission logic, which then only chooses between them: the decision is the
+        # longest logic of the core, and an adder behind it cost 11 ns on ECP5.
+        returned = credits + (queue.r_rdy & self.m_axis_tready) + (lr.retire & ~lr.produce)
+        kept = Signal(range(self.queue_depth + 3), name="credits_kept")
+        taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
+        m.d.comb += [kept.eq(returned), taken.eq(returned - 1)]
+        m.d.sync += [credits.eq(Mux(admit, taken, kept)),
+                     has_credit.eq(Mux(admit, _has_room(taken), _has_room(kept)))]
+
+        # Frames started whose last word is not queued yet: a flush ends when none is left
+        # (frames shorter than the pipeline may overlap the flush of the one before).
+        outstanding = Signal(range(8))
+        frame_done = lr.produce & (lr.x == width - 1) & (lr.y == height - 1)
+
+        # Framing and admission. An explicit state register and if/else chains rather
+        # than m.FSM: Amaranth's FSM emits partial case statements that Verilator's lint
+        # rejects (CASEINCOMPLETE). The decision, its pop and the queue's next head form a
+        # loop of one clock, so every comparison it needs is a flag registered beside its
+        # counter: the decision is then a few LUTs deep (13 ns on ECP5 with the
+        # comparisons inside the loop).
+        state = Signal(range(4), name="framing_state")
+        column = Signal(range(width))             # column of the next admitted position
+        row = Signal(range(max(2, height)))
+        line_start = Signal(init=1, name="column_zero")          # column == 0
+        end_of_line = Signal(name="end_of_line")                  # column == W - 1
+        last_row = Signal(name="last_row")                        # row == H - 1
+        end_of_frame = end_of_line & last_row
+        none_outstanding = Signal(init=1, name="none_outstanding")
+        m.d.sync += none_outstanding.eq(outstanding == 0)  # a clock late: a flush ends late
+        take = Signal()           # the admitted position is the head pixel (else zeros)
+        start, overlap = Signal(), Signal()
+        error = Signal()
+        m.d.sync += self.framing_error.eq(error)
+        can_start = head_valid & head.user & ~inp.switch_pending & has_credit
+        idle, framing, filling = (state == n for n in (IDLE, FRAME, FILL))
+
+        with m.If(idle | (state == FLUSH)):
+            # Outside a frame every beat without a start of frame is dropped.
+            with m.If(head_valid & ~head.user):
+                m.d.comb += [pop.eq(1), error.eq(1)]
+        with m.If(decide):
+            with m.If(idle):
+                with m.If(can_start):
+                    m.d.comb += [admit.eq(1), take.eq(1), start.eq(1), pop.eq(1)]
+            with m.Elif(framing):
+                with m.If(head_valid & head.user):
+                    m.d.comb += error.eq(1)
+                    m.d.sync += state.eq(FILL)
+                with m.Elif(head_valid & has_credit):
+                    m.d.comb += [admit.eq(1), take.eq(1), pop.eq(1)]
+                    with m.If(head.last != end_of_line):
+                        m.d.comb += error.eq(1)
+            with m.Elif(filling):
+                with m.If(has_credit):
+                    m.d.comb += admit.eq(1)
+            with m.Else():  # FLUSH
+                with m.If(none_outstanding):
+                    m.d.sync += state.eq(IDLE)
+                with m.Elif(line_start & can_start):
+                    m.d.comb += [admit.eq(1), take.eq(1), start.eq(1), overlap.eq(1),
+                                 pop.eq(1)]
+                with m.Elif(has_credit):
+                    m.d.comb += admit.eq(1)
+
+        with m.If(admit):
+            with m.If(start):
+                m.d.sync += [column.eq(1), row.eq(0), line_start.eq(0),
+                             end_of_line.eq(width == 2), last_row.eq(height == 1)]
+                # A line of one pixel cannot end on the first pixel: width > 2 always.
+                with m.If(head.last):
+                    m.d.comb += error.eq(1)
+                    m.d.sync += state.eq(FILL)
+                with m.Else():
+                    m.d.sync += state.eq(FRAME)
+            with m.Else():
+                m.d.sync += [column.eq(Mux(end_of_line, 0, column + 1)),
+                             line_start.eq(end_of_line),
+                             end_of_line.eq(~end_of_line & (column == width - 2))]
+                with m.If(end_of_line):
+                    m.d.sync += [row.eq(Mux(end_of_frame, 0, row + 1)),
+                                 last_row.eq(~end_of_frame & (row == height - 2))]
+                with m.If(~(state == FLUSH)):
+                    with m.If(end_of_frame):
+                        m.d.sync += state.eq(FLUSH)
+                    with m.Elif(take & (head.last != end_of_line)):
+                        m.d.sync += state.eq(FILL)
+
+        m.d.sync += outstanding.eq(outstanding + (admit & start) - frame_done)
+
+        # The decision's registers: round 0 of the next slot.
+        admitted, started, overlapping = Signal(), Signal(), Signal()
+        pixels = Signal(16, reset_less=True)
+        m.d.sync += [admitted.eq(admit), started.eq(start), overlapping.eq(overlap),
+                     pixels.eq(Mux(take, head.data, 0))]
+
+        m.d.comb += [
+            inp.admit.eq(admitted), inp.start.eq(started), inp.overlap.eq(overlapping),
+            inp.left.eq(pixels[:8]), inp.right.eq(pixels[8:]),
+            inp.first.eq(first), inp.round.eq(round_),
+            calc.window_left.eq(inp.window_left), calc.window_right.eq(inp.window_right),
+            calc.tag.eq(inp.tag),
+            calc.first.eq(slots.first(self.calculation_at)),
+            calc.round.eq(slots.round(self.calculation_at)),
+            ev.cost.eq(calc.best_cost), ev.disparity.eq(calc.best_disparity),
+            ev.tag.eq(slots.delay(calc.centre, self.sums_at,
+                                  self.evaluation_at - self.sums_at, "evaluation_tag")),
+            ev.first.eq(slots.first(self.evaluation_at)),
+            ev.round.eq(slots.round(self.evaluation_at)),
+            lr.sums.eq(calc.sums), lr.tag.eq(calc.centre),
+            lr.first.eq(slots.first(self.sums_at)), lr.round.eq(slots.round(self.sums_at)),
+            lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out),
+        ]
         return m
 
 
-def _enable(state, last_round, head_valid, head_is_start, out_room):
-    """Whether a clock may advance the pipeline in ``state``.
+def _has_room(credits):
+    """Whether the output queue is sure to take the word of one more position."""
+    return credits != 0
 
-    A clock needs room for an output word, and in the last round of a position also
-    the position: the input pixel (a start of frame in IDLE, any other pixel in FRAME) or
-    a dummy position (FILL, FLUSH).
+
+def _queue(m, incoming, push_valid, pop, ready):
+    """A two-entry queue of registers; returns ``(head, valid)``.
+
+    A word is taken when ``push_valid`` and the queue is not full; ``ready`` is driven with
+    "not full", from the level register alone.
     """
-    position = Mux(state == IDLE, head_valid & head_is_start,
-                   Mux(state == FRAME, head_valid & ~head_is_start, 1))
-    return out_room & (~last_round | position)
-
-
-def _queue(m, name, incoming, push_valid, pop, ready=None):
-    """A two-entry queue of registers with the next clock's head and fill level.
-
-    Returns ``(head, valid, next_head, next_valid, next_room)``; ``next_room``: the queue
-    can take a word in the next clock. A word is taken when ``push_valid`` and the queue
-    is not full; ``ready`` (if given) is driven with "not full", from the level register
-    alone.
-    """
-    entries = [Signal.like(incoming, name=f"{name}_queue{i}") for i in range(2)]
-    level = Signal(range(3), name=f"{name}_queue_level")
+    entries = [Signal.like(incoming, name=f"in_queue{i}") for i in range(2)]
+    level = Signal(range(3), name="in_queue_level")
     push = push_valid & (level != 2)
-    if ready is not None:
-        m.d.comb += ready.eq(level != 2)
+    m.d.comb += ready.eq(level != 2)
     kept = level - pop  # words left after this clock's pop, before the push
-    next_level = Signal.like(level, name=f"{name}_queue_next_level")
-    m.d.comb += next_level.eq(kept + push)
-    m.d.sync += level.eq(next_level)
+    m.d.sync += level.eq(kept + push)
     with m.If(pop):
         m.d.sync += entries[0].eq(entries[1])
     with m.If(push):
@@ -226,6 +284,4 @@ def _queue(m, name, incoming, push_valid, pop, ready=None):
             m.d.sync += entries[0].eq(incoming)
         with m.Else():
             m.d.sync += entries[1].eq(incoming)
-    next_head = Signal.like(incoming, name=f"{name}_queue_next_head")
-    m.d.comb += next_head.eq(Mux(kept == 0, incoming, Mux(pop, entries[1], entries[0])))
-    return entries[0], level != 0, next_head, next_level != 0, next_level != 2
+    return entries[0], level != 0

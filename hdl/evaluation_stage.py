@@ -9,7 +9,7 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .common import better, bits_for, tag_layout
+from .common import SlotClock, better, bits_for, tag_layout
 
 __all__ = ["EvaluationStage"]
 
@@ -19,41 +19,44 @@ class EvaluationStage(wiring.Component):
 
     Attributes
     ----------
-    en : In(1)
     cost, disparity : In
-        The partition winner of ``tag.round``.
+        The partition winner of the round, one per clock.
+    first, round : In
+        Slot timing at the input.
     tag : In(tag_layout)
+        The position, slot-aligned at the input.
     disparity_out : Out
-        Winner over rounds 0 .. tag.round; final when ``done``.
-    done : Out(1)
-        This clock carries the last round (combinational from ``tag``).
+        The winner over all rounds, slot-aligned at ``latency``.
+    tag_out : Out(tag_layout)
+        ``tag`` at ``latency``.
     latency : int
-        0: the final winner is available in the clock of the last round.
+        R: the winner is latched in the last round's clock.
     """
-
-    latency = 0
 
     def __init__(self, params):
         self.params = params
+        self.latency = params.rounds
         super().__init__({
-            "en": In(1),
             "cost": In(params.aggregated_cost_bits),
             "disparity": In(bits_for(params.disparities - 1)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "tag": In(tag_layout(params)),
             "disparity_out": Out(bits_for(params.disparities - 1)),
-            "done": Out(1),
+            "tag_out": Out(tag_layout(params)),
         })
 
     def elaborate(self, platform):
+        p = self.params
         m = Module()
-        best_cost = Signal.like(self.cost)
-        best_disparity = Signal.like(self.disparity)
-        # A later partition replaces the running winner only if strictly better.
-        take = (self.tag.round == 0) | better(self.cost, best_cost)
-        cost = Mux(take, self.cost, best_cost)
+        slots = SlotClock(m, self.first, self.round, p.rounds, "evaluation")
+        best_cost = Signal.like(self.cost, name="best_cost", reset_less=True)
+        best_disparity = Signal.like(self.disparity, name="best_disparity", reset_less=True)
+        take = slots.first(0) | better(self.cost, best_cost)
         disparity = Mux(take, self.disparity, best_disparity)
-        with m.If(self.en):
-            m.d.sync += [best_cost.eq(cost), best_disparity.eq(disparity)]
-        m.d.comb += [self.disparity_out.eq(disparity),
-                     self.done.eq(self.tag.round == self.params.rounds - 1)]
+        m.d.sync += [best_cost.eq(Mux(take, self.cost, best_cost)), best_disparity.eq(disparity)]
+        final = Signal.like(self.disparity, name="final", reset_less=True)
+        with m.If(slots.first(p.rounds - 1) if p.rounds > 1 else 1):
+            m.d.sync += final.eq(disparity)
+        m.d.comb += [self.disparity_out.eq(final),
+                     self.tag_out.eq(slots.delay(self.tag, 0, p.rounds, "evaluated_tag"))]
         return m

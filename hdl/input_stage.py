@@ -2,12 +2,18 @@
 
 Hardware counterpart of the golden model's zero-padded windows
 (:func:`npstereo.golden.transform.neighbour_planes`). Pixels arrive in raster order, one
-*position* per ``advance``. One :class:`~amaranth.lib.memory.Memory` per image (depth W,
+per admitted slot (``admit``). One :class:`~amaranth.lib.memory.Memory` per image (depth W,
 B-1 pixels wide) holds the previous B-1 rows of every column, so each position yields a
 raster-continuous column of B pixels; a shift register of B columns forms the window.
 The window centre trails the newest pixel by r rows and r columns; a mask computed from the
 centre's counters clears every window pixel outside the frame (zero padding without extra
 cycles at line ends).
+
+Frames may follow each other without a flush: when a frame starts right after the previous
+one (``overlap``), the centre keeps the previous frame's coordinates until it reaches the
+new frame's first pixel, r rows and r columns later, so the previous frame's last rows are
+still computed (their window rows below the frame are masked, whatever pixels the new frame
+put there).
 """
 
 from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
@@ -15,19 +21,21 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import column_inside, tag_layout, y_range
-from .plan import input_latency
+from .common import SlotClock, bits_for, column_inside, pipe, tag_layout, y_range
+from .plan import INPUT_LATENCY
 
 __all__ = ["InputStage"]
 
+LATENCY = INPUT_LATENCY
+
 
 def _row_inside(y, offset, height):
-    """Window row ``offset`` (-r .. r) of a centre in row ``y`` lies inside the frame."""
+    """Row ``y + offset`` lies inside the frame."""
     return (y >= -offset) & (y < height - offset)
 
 
 class InputStage(wiring.Component):
-    """Windows of both images around one centre per ``advance``.
+    """Windows of both images around one centre per admitted slot.
 
     Parameters
     ----------
@@ -36,99 +44,193 @@ class InputStage(wiring.Component):
 
     Attributes
     ----------
-    left, right : In(8)
-        The pixel entering with this ``advance`` (0 for dummy flush positions).
-    advance : In(1)
-        Take one position: shift the window, write the line buffers, step the counters.
+    admit : In(1)
+        This clock is round 0 of a slot that carries a position: take ``left``/``right``.
     start : In(1)
-        With ``advance``: this pixel is (0, 0) of a new frame (restarts the counters).
+        With ``admit``: the pixel is (0, 0) of a new frame (restarts the column counter).
+    overlap : In(1)
+        With ``start``: the previous frame still has centres to compute (it was not
+        flushed): keep its coordinates until the new frame's first centre.
+    left, right : In(8)
+        The pixels of the admitted position (0 for dummy positions).
+    first, round : In
+        Round 0 pulse and round of the slot timing at the admission offset.
     window_left, window_right : Out(ArrayLayout(unsigned(8), B * B))
-        Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r).
+        Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r), slot-aligned
+        at offset ``latency``; they change only when a position is admitted.
     tag : Out(tag_layout)
-        Centre of the windows; ``round`` is 0 (positions have no rounds here).
+        The windows' centre, slot-aligned at offset ``latency``.
+    switch_pending : Out(1)
+        A new frame started and its first centre has not been reached yet: another start
+        must wait (frames shorter than the window radius).
     latency : int
-        Positions from a pixel's entry to the window centred on it: r * W + r
-        (:func:`~.plan.input_latency`).
+        Clocks from ``admit`` to the windows and tag.
     """
+
+    latency = LATENCY
 
     def __init__(self, params):
         self.params = params
-        self.latency = input_latency(params)
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
         super().__init__({
-            "left": In(8), "right": In(8), "advance": In(1), "start": In(1),
+            "admit": In(1), "start": In(1), "overlap": In(1),
+            "left": In(8), "right": In(8),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "window_left": Out(window), "window_right": Out(window),
-            "tag": Out(tag_layout(params)),
+            "tag": Out(tag_layout(params)), "switch_pending": Out(1),
         })
 
     def elaborate(self, platform):
         p = self.params
         width, height, block, r = p.width, p.height, p.block, p.radius
         m = Module()
+        slots = SlotClock(m, self.first, self.round, p.rounds, "input")
 
-        # The line buffers' read address is the column after the incoming pixel's; it is
-        # kept in a register (col_after) rather than incremented in front of the block
-        # RAMs' address inputs.
+        # Column of the admitted pixel: the line buffers' address. A start restarts it at
+        # 0 (one multiplexer level in front of the block RAM's address, from registers).
         col = Signal(range(width))
-        col_after = Signal(range(width))
-        addr = Mux(self.start, 0, col)
-        next_addr = Mux(self.start, 1, col_after)
-        with m.If(self.advance):
-            m.d.sync += [col.eq(next_addr),
-                         col_after.eq(Mux(next_addr == width - 1, 0, next_addr + 1))]
+        address = Mux(self.start, 0, col)
+        with m.If(self.admit):
+            m.d.sync += col.eq(Mux(address == width - 1, 0, address + 1))
 
-        # Centre counters: position 0 of a frame is centred r rows and r columns earlier.
-        first = -(r * width + r)
-        first_x, first_y = first % width, first // width
-        _, highest = y_range(p)
-        tag = Signal(tag_layout(p))
-        next_x = Signal.like(tag.x)
-        next_y = Signal.like(tag.y)
-        with m.If(self.start):
-            m.d.comb += [next_x.eq(first_x), next_y.eq(first_y)]
-        with m.Elif(tag.x == width - 1):
-            m.d.comb += [next_x.eq(0), next_y.eq(Mux(tag.y < highest, tag.y + 1, tag.y))]
-        with m.Else():
-            m.d.comb += [next_x.eq(tag.x + 1), next_y.eq(tag.y)]
-        with m.If(self.advance):
-            m.d.sync += [tag.live.eq(1), tag.x.eq(next_x), tag.y.eq(next_y)]
-        m.d.comb += self.tag.eq(tag)
+        # Two clocks later the line buffers' rows of that column have left the block RAM
+        # and its output register; the pixel, the address and the flags wait for them.
+        admitted = pipe(m, self.admit, 2, "admitted", reset=True)
+        written_address = pipe(m, address, 2, "written_address")
 
-        # Which window rows/columns lie inside the frame, registered with the counters
-        # from their next values: comparing the counters in the same clock would put two
-        # carry chains (this one and the transform's comparison) in front of the
-        # transform's first register.
-        row_ok = [Signal(name=f"row_ok{k}") for k in range(block)]
-        col_ok = [Signal(name=f"col_ok{k}") for k in range(block)]
-        for k, offset in enumerate(range(-r, r + 1)):
-            with m.If(self.advance):
-                m.d.sync += row_ok[k].eq(_row_inside(next_y, offset, height))
-                m.d.sync += col_ok[k].eq(column_inside(next_x, offset, width))
-        keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
-                for row in range(block)]
-        m.d.comb += [keep[row][c].eq(row_ok[row] & col_ok[c])
-                     for row in range(block) for c in range(block)]
-        for name, pixel, window in (("left", self.left, self.window_left),
-                                    ("right", self.right, self.window_right)):
+        tag, keep = self._centre(m, slots)
+        for name, pixel in (("left", self.left), ("right", self.right)):
             # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
+            # Every read address differs from the address written in the same clock (the
+            # write trails the read of the same column by two clocks, the next read of it
+            # comes a row later), so Yosys needs no collision logic (no_rw_check).
             m.submodules[f"lines_{name}"] = lines = Memory(
-                shape=unsigned(8 * (block - 1)), depth=width, init=[])
-            rd = lines.read_port(domain="sync")
-            wr = lines.write_port()
-            older = [rd.data[8 * s:8 * s + 8] for s in range(block - 1)]
+                shape=unsigned(8 * (block - 1)), depth=width, init=[],
+                attrs={"no_rw_check": 1})
+            read = lines.read_port(domain="sync")
+            write = lines.write_port()
+            # A plain register right behind the read port: the block RAM's own output
+            # register on ECP5 (the flow packs it), 5 ns shorter than its bare output.
+            older_word = pipe(m, read.data, 1, f"{name}_read")
+            older = [older_word[8 * s:8 * s + 8] for s in range(block - 1)]
+            newest_pixel = pipe(m, pixel, 2, f"{name}_pixel")
             m.d.comb += [
-                rd.addr.eq(next_addr), rd.en.eq(self.advance),
-                wr.addr.eq(addr), wr.en.eq(self.advance),
-                wr.data.eq(Cat(pixel, *older[:block - 2])),
+                read.addr.eq(address),
+                write.addr.eq(written_address), write.en.eq(admitted),
+                write.data.eq(Cat(newest_pixel, *older[:block - 2])),
             ]
             # Column c (0 = oldest, dx = -r) packs its B pixels top (dy = -r) to bottom.
-            newest_column = Cat(*reversed(older), pixel)
-            columns = [Signal(8 * block, name=f"{name}_column{c}") for c in range(block)]
-            with m.If(self.advance):
+            columns = [Signal(8 * block, name=f"{name}_column{c}", reset_less=True)
+                       for c in range(block)]
+            with m.If(admitted):
                 m.d.sync += [columns[c].eq(columns[c + 1]) for c in range(block - 1)]
-                m.d.sync += columns[block - 1].eq(newest_column)
+                m.d.sync += columns[block - 1].eq(Cat(*reversed(older), newest_pixel))
+            window = self.window_left if name == "left" else self.window_right
             # One assignment of the whole window: per-element assignments would each cost a
             # full-width assignment cell in the netlist.
             m.d.comb += window.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
                                       for row in range(block) for c in range(block)))
+
+        m.d.comb += self.tag.eq(tag)
         return m
+
+    def _centre(self, m, slots):
+        """The centre's tag and the window masks, updated with the window.
+
+        The tag is slot-aligned at offset LATENCY: x, y and live change with each
+        admitted position, ``valid`` says in every slot whether it carries one.
+
+        Two frames' coordinates coexist while frames overlap. The window masks follow the
+        *window centre's* frame: a pixel's transform sees zeros outside its own frame. The
+        tag that leaves the stage names the same position, but in the frame of the
+        *aggregation centre*, a rows and a columns further back, for everything after the
+        transforms masks rows and columns relative to that centre: the finishing frame's
+        last aggregation window must see the new frame's first row as outside. So the tag
+        switches to the new frame a*W + a positions after the window masks do.
+
+        Returns the tag register and ``keep[row][column]``, 1 where the window pixel lies
+        inside the window centre's frame.
+        """
+        p = self.params
+        width, height, block, r, a = p.width, p.height, p.block, p.radius, p.agg_radius
+        # Position 0 of a frame is centred r rows and r columns earlier.
+        lag = r * width + r
+        tag_lag = lag + a * width + a
+        first_x, first_y = -lag % width, -lag // width
+        _, highest = y_range(p)
+        layout = tag_layout(p)
+
+        # The centre steps a clock after the admission, a clock before the window shifts:
+        # the step (its counters and multiplexers) and the masks (comparisons of the new
+        # counters) are two clocks' work, not one. The step uses flags registered from
+        # the counters (x at the line end, rows below the saturation, the countdown's two
+        # events) instead of comparing them on its way.
+        stepping = pipe(m, self.admit, 1, "stepping", reset=True)
+        start = pipe(m, self.start, 1, "stepping_start", reset=True)
+        overlap = pipe(m, self.overlap, 1, "stepping_overlap", reset=True)
+        x = Signal(layout["x"].shape, name="centre_x")
+        y = Signal(layout["y"].shape, name="centre_y")
+        window_y = Signal(layout["y"].shape, name="window_y")
+        live = Signal(name="centre_live")
+        countdown = Signal(range(tag_lag + 1))    # positions until the tag's switch
+        line_end = Signal(name="centre_line_end")              # x == W - 1
+        y_room, window_room = Signal(name="y_room"), Signal(name="window_y_room")
+        switch_window = Signal(name="switch_window")           # countdown == window event
+        switch_tag = Signal(name="switch_tag")                 # countdown == 1
+        # A register of its own, not a comparison: it feeds the admission decision.
+        pending = Signal()
+        m.d.comb += self.switch_pending.eq(pending)
+        # Between jumps the rows change only at line ends, W > 2 steps apart: flags a clock
+        # late are in time (a jump sets them itself, below).
+        m.d.sync += [y_room.eq(y < highest), window_room.eq(window_y < highest)]
+        window_event = tag_lag - lag + 1
+
+        with m.If(stepping):
+            with m.If(start & ~overlap):
+                # The previous frame is finished: jump to the new frame's coordinates.
+                # The rows' flags follow at once: the first line end may be the next step.
+                m.d.sync += [x.eq(first_x), y.eq(first_y), window_y.eq(first_y),
+                             live.eq(1), line_end.eq(first_x == width - 1),
+                             y_room.eq(first_y < highest), window_room.eq(first_y < highest)]
+            with m.Else():
+                m.d.sync += [x.eq(Mux(line_end, 0, x + 1)),
+                             line_end.eq(~line_end & (x == width - 2))]
+                with m.If(line_end & y_room):
+                    m.d.sync += y.eq(y + 1)
+                with m.If(line_end & window_room):
+                    m.d.sync += window_y.eq(window_y + 1)
+                # The window centre reaches the new frame's pixel (0, 0), then the
+                # aggregation centre does (the window centre is at (a, a) then); x agrees
+                # in both frames.
+                with m.If(switch_window):
+                    m.d.sync += [window_y.eq(0), window_room.eq(0 < highest)]
+                with m.If(switch_tag):
+                    m.d.sync += [y.eq(a), live.eq(1), y_room.eq(a < highest)]
+            with m.If(start & overlap):
+                m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
+                             switch_window.eq(tag_lag == window_event),
+                             switch_tag.eq(tag_lag == 1)]
+            with m.Elif(countdown != 0):
+                m.d.sync += [countdown.eq(countdown - 1), pending.eq(countdown > 1),
+                             switch_window.eq(countdown == window_event + 1),
+                             switch_tag.eq(countdown == 2)]
+
+        # The tag leaves with the window (slot-aligned at LATENCY).
+        tag = Signal(layout)
+        admitted = pipe(m, stepping, 1, "admitted_tag", reset=True)
+        with m.If(slots.first(LATENCY - 1)):
+            m.d.sync += tag.valid.eq(admitted)
+        with m.If(admitted):
+            m.d.sync += [tag.x.eq(x), tag.y.eq(y), tag.live.eq(live)]
+
+        # Which window pixels lie inside the frame, one register per pixel, from the
+        # stepped counters: one flag per window row would fan out to a whole row of both
+        # windows (5.6 ns of routing on ECP5).
+        row_ok = [_row_inside(window_y, offset, height) for offset in range(-r, r + 1)]
+        col_ok = [column_inside(x, offset, width) for offset in range(-r, r + 1)]
+        keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
+                for row in range(block)]
+        with m.If(admitted):
+            m.d.sync += [keep[row][c].eq(row_ok[row] & col_ok[c])
+                         for row in range(block) for c in range(block)]
+        return tag, keep

@@ -3,152 +3,243 @@
 Hardware counterpart of :class:`npstereo.golden.wta.RightWTA`,
 :func:`npstereo.golden.lr_check.lr_check` and :func:`~npstereo.golden.lr_check.invalidate_border`.
 
-The right-referenced winner dR(xr) collects the costs S(xr + d, d) of the positions
-xr .. xr + D - 1, so it is final D - 1 positions after xr. A ring of D (cost, disparity)
-slots, slot k for the right pixel k positions back, takes each round's candidates
-(strict ``<`` in increasing d, only for xr = x - d >= 0 in the same row); at every
-position the ring shifts and the slot leaving it is a final dR, kept in a history of the
-last D. The left winners wait D + 1 positions in a delay line, then meet dR(x - dL) in
-that history.
+**Right-referenced WTA.** dR(xr) is the argmin over d of S(xr + d, d): its candidates come
+from the positions xr .. xr + D - 1, candidate d from cost unit d // R in round d % R. So the
+running winner of right pixel xr lives where its candidates are made: with unit i while
+that unit handles it (R positions, rounds j = 0 .. R-1 handle xr = x - i*R - j), in a store
+of R words per unit (LUT RAM, read-modify-write once per round), then it moves to unit
+i + 1. Each unit has one comparator, not one per disparity. Units run one clock apart
+(unit i's costs are delayed i clocks) so that the word a unit finishes in round R-1 is
+registered and ready for the next unit's round 0. The winner leaving the last unit is final:
+dR of the position D - 1 back, which goes into a history of dR indexed by position.
 
-The result is registered once more before it leaves (``clock_latency``): the partner
-lookup is a D:1 multiplexer and the consistency test a subtraction and a comparison,
-which together with the output word's register were the longest path of the whole core
-(rank 7x7, D = 100 on ECP5: 20.5 ns, 13 logic levels).
+**Check.** Left winners dL wait in a store indexed by position until all their partners are
+final (D positions), then meet dR(x - dL) from the history; the partner lookup is a memory
+read, not a D:1 multiplexer. Every slot with a position produces one *retire* pulse at the
+output (the credit for the output queue, see :mod:`.core`), and, if its left pixel lies in
+the frame, one output word.
 """
 
-from amaranth.hdl import Array, Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import absolute_difference, better, bits_for, tag_layout
-from .plan import LR_CLOCK_LATENCY, lr_latency
+from .common import SlotClock, Store, absolute_difference, better, bits_for, pipe, round_base, \
+    tag_layout
+from .plan import LR_STAGE_A, lr_timing
 
 __all__ = ["LRCheck"]
 
 
+def _primed(seen, depth):
+    """The left winners' store holds a written word for the position checked now: D
+    positions have left the chain since reset (before, it holds whatever it held)."""
+    return seen == depth
+
+
 def _consistent(difference, threshold):
-    """The consistency test: |dL - dR| <= T keeps the pixel, as in the golden model's
-    :func:`~npstereo.golden.lr_check.lr_check`."""
+    """The consistency test on |dL - dR|."""
     return difference <= threshold
 
 
 class LRCheck(wiring.Component):
-    """Valid flag and disparity of one position per ``produce``.
+    """Valid flag and disparity of one output word per position.
+
+    Parameters
+    ----------
+    params : StereoParams
+    left_offset : int
+        Where ``disparity``/``left_tag`` are slot-aligned, in clocks after this stage's
+        input (``sums``/``tag``).
 
     Attributes
     ----------
-    en : In(1)
-    costs : In(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
-        S(x, y, tag.round * D/R + i), from the calculation stage.
+    sums : In(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
+        S(x, i*R + round) of unit i for the position ``tag``.
     tag : In(tag_layout)
-    disparity, done : In
-        From the evaluation stage: dL of ``tag``'s position when ``done``.
+        The position of ``sums`` (slot-aligned).
+    first, round : In
+        Slot timing at the input.
+    disparity, left_tag : In
+        dL of the position ``left_tag`` (from the evaluation stage), at ``left_offset``.
+    retire : Out(1)
+        One pulse per slot with a position, at offset ``latency``.
     produce : Out(1)
-        This clock carries a result for an in-frame position (combinational).
+        With ``retire``: an output word, for an in-frame position.
     valid, disparity_out, x, y : Out
-        The result and its position.
+        The word and its position (with ``produce``).
     latency : int
-        Positions from the evaluation stage's result to ``produce``: D + 1 with the check,
-        0 without (:func:`~.plan.lr_latency`), ...
-    clock_latency : int
-        ... and then 1 clock, the output register stage (:data:`~.plan.LR_CLOCK_LATENCY`).
+        Clocks from the input to ``retire``.
     """
 
-    clock_latency = LR_CLOCK_LATENCY
-
-    def __init__(self, params):
-        self.params = params
-        self.latency = lr_latency(params)
-        d_bits = bits_for(params.disparities - 1)
+    def __init__(self, params, left_offset):
+        self.params, self.left_offset = params, left_offset
+        depth, rounds, units = params.disparities, params.rounds, params.per_round
+        timing = lr_timing(params, left_offset)
+        #: Offset of the final dR leaving the last unit (see elaborate()).
+        self.exit = timing.exit
+        self.history_depth = timing.history
+        self.latency = timing.latency
+        d_bits = bits_for(depth - 1)
         layout = tag_layout(params)
         super().__init__({
-            "en": In(1),
-            "costs": In(data.ArrayLayout(unsigned(params.aggregated_cost_bits),
-                                         params.per_round)),
+            "sums": In(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
             "tag": In(layout),
+            "first": In(1), "round": In(bits_for(rounds - 1)),
             "disparity": In(d_bits),
-            "done": In(1),
-            "produce": Out(1),
-            "valid": Out(1),
-            "disparity_out": Out(d_bits),
-            "x": Out(layout["x"].shape),
-            "y": Out(layout["y"].shape),
+            "left_tag": In(layout),
+            "retire": Out(1), "produce": Out(1),
+            "valid": Out(1), "disparity_out": Out(d_bits),
+            "x": Out(layout["x"].shape), "y": Out(layout["y"].shape),
         })
 
-    def _report(self, m, tag, disparity, ready, keep=None):
-        """Outputs from (tag, disparity), registered; ``keep`` takes the registered values.
-
-        ``ready``: this clock holds the final result of ``tag``'s position.
-        """
-        p = self.params
-        staged_tag = Signal.like(tag, name="staged_tag")
-        staged_disparity = Signal.like(disparity, name="staged_disparity")
-        staged_produce = Signal(name="staged_produce")
-        inside = tag.live & (tag.y >= 0) & (tag.y < p.height)
-        with m.If(self.en):
-            m.d.sync += [staged_tag.eq(tag), staged_disparity.eq(disparity),
-                         staged_produce.eq(ready & inside)]
-        kept = 1 if keep is None else keep(staged_tag, staged_disparity)
-        m.d.comb += [
-            self.produce.eq(staged_produce),
-            self.valid.eq(kept & (staged_tag.x >= p.first_valid_column)),
-            self.disparity_out.eq(staged_disparity),
-            self.x.eq(staged_tag.x), self.y.eq(staged_tag.y),
-        ]
+    def _in_frame(self, tag):
+        return tag.live & (tag.y >= 0) & (tag.y < self.params.height)
 
     def elaborate(self, platform):
         p = self.params
         m = Module()
+        slots = SlotClock(m, self.first, self.round, p.rounds, "lr")
         if not p.lr_check:
-            self._report(m, self.tag, self.disparity, self.done)
+            tag = self.left_tag
+            with m.If(slots.first(self.left_offset)):
+                m.d.sync += [self.retire.eq(tag.valid),
+                             self.produce.eq(tag.valid & self._in_frame(tag))]
+            with m.Else():
+                m.d.sync += [self.retire.eq(0), self.produce.eq(0)]
+            m.d.sync += [self.valid.eq(tag.x >= p.first_valid_column),
+                         self.disparity_out.eq(self.disparity),
+                         self.x.eq(tag.x), self.y.eq(tag.y)]
             return m
-
-        depth, per_round = p.disparities, p.per_round
-        cost_bits, d_bits = p.aggregated_cost_bits, bits_for(depth - 1)
-        slot_layout = data.StructLayout({"cost": unsigned(cost_bits), "d": unsigned(d_bits)})
-        slots = [Signal(slot_layout, name=f"right_slot{k}") for k in range(depth)]
-        final = [Signal(d_bits, name=f"right_final{k}") for k in range(depth)]
-        first_round = self.tag.round == 0
-
-        def candidate(k, base):
-            """Slot k's value after the candidate d = k of this round (if xr >= 0)."""
-            cost = self.costs[k % per_round]
-            # Candidates come in increasing d: ties keep the lowest.
-            take = (self.tag.x >= k) & better(cost, base.cost)
-            return [slots[k].cost.eq(Mux(take, cost, base.cost)),
-                    slots[k].d.eq(Mux(take, k, base.d))]
-
-        with m.If(self.en & first_round):
-            # New position: shift; slot 0 (xr = x) starts with d = 0, always in the row.
-            m.d.sync += [slots[0].cost.eq(self.costs[0]), slots[0].d.eq(0)]
-            for k in range(1, depth):
-                m.d.sync += (candidate(k, slots[k - 1]) if k < per_round
-                             else [slots[k].eq(slots[k - 1])])
-            m.d.sync += [final[0].eq(slots[depth - 1].d)]
-            m.d.sync += [final[k].eq(final[k - 1]) for k in range(1, depth)]
-        for j in range(1, p.rounds):
-            with m.If(self.en & (self.tag.round == j)):
-                for k in range(j * per_round, (j + 1) * per_round):
-                    m.d.sync += candidate(k, slots[k])
-
-        # Left winners wait until dR of every possible partner is final: after the ring
-        # shift of position x + D, final[m] holds dR(x - m).
-        entry_layout = data.StructLayout({"tag": tag_layout(p), "d": unsigned(d_bits)})
-        waiting = [Signal(entry_layout, name=f"left_wait{k}") for k in range(depth + 1)]
-        with m.If(self.en & self.done):
-            m.d.sync += [waiting[0].tag.eq(self.tag), waiting[0].d.eq(self.disparity)]
-            m.d.sync += [waiting[k].eq(waiting[k - 1]) for k in range(1, depth + 1)]
-        entry = waiting[depth]
-        # Padded to every index value so that the multiplexer is a complete case.
-        partner = Array(final + final[-1:] * (2 ** d_bits - depth))[entry.d]
-        staged_partner = Signal(d_bits)
-        with m.If(self.en):
-            m.d.sync += staged_partner.eq(partner)
-
-        def keep(tag, d):
-            difference = absolute_difference(d, staged_partner)
-            return (tag.x >= d) & _consistent(difference, p.lr_threshold)
-
-        self._report(m, entry.tag, entry.d, first_round, keep)
+        final, leaving = self._right_winners(m, slots)
+        self._check(m, slots, final, leaving)
         return m
+
+    def _right_winners(self, m, slots):
+        """The units' stores of running winners; returns dR leaving the last unit and its
+        pulse (at ``self.exit``).
+
+        In round j unit i reads (stage A) the winner of xr = x - j*D/R - i, compares it
+        with its candidate d = j*D/R + i (stage B, a clock later) and writes the
+        result where the next unit reads it in round j of the next position (the last unit
+        writes unit 0's word j + 1). The next unit has read its own word j a clock before
+        the write lands, and reads it again R clocks later: no skew, no bypass. Unit 0's
+        word 0 is a fresh winner (d = 0 is every right pixel's first candidate). With
+        R = 1 each store is a register that the next unit reads in stage B directly.
+        """
+        p = self.params
+        rounds, units = p.rounds, p.per_round
+        cost_bits, d_bits = p.aggregated_cost_bits, bits_for(p.disparities - 1)
+        entry = data.StructLayout({"cost": unsigned(cost_bits), "d": unsigned(d_bits),
+                                   "empty": unsigned(1)})
+        # Candidates at stage B: unit i's disparity j*D/R + i takes part iff xr = x - d is
+        # in the row (x - j*D/R >= i) and the position lies in the frame; each unit's flag
+        # is a register of its own (a comparison in stage B would lengthen its path).
+        tag = slots.delay(self.tag, 0, 1, "lr_tag")
+        x_minus_base = Signal(range(-p.disparities, p.width), name="lr_x_minus_base")
+        in_frame = Signal(name="lr_in_frame")
+        m.d.sync += [x_minus_base.eq(tag.x - round_base(m, slots, 1, units)),
+                     in_frame.eq(tag.valid & self._in_frame(tag))]
+        stage_a, stage_b = LR_STAGE_A, LR_STAGE_A + 1
+        round_a, round_b = slots.round(stage_a), slots.round(stage_b)
+        first_disparity = pipe(m, round_base(m, slots, 1, units), stage_b - 1,
+                               "lr_first_disparity")
+        writing = slots.delay(tag.valid, 1, stage_b - 1, "lr_writing")
+        last = slots.first(stage_b + rounds - 1) if rounds > 1 else Const(1)
+        stores = [Store(m, f"right_winners{i}", entry, rounds) for i in range(units)]
+        updated_words = []
+        for i, store in enumerate(stores):
+            ok = Signal(name=f"candidate_ok{i}")
+            m.d.sync += ok.eq(in_frame & (x_minus_base >= i))
+            ok = pipe(m, ok, stage_b - 3, f"candidate_ok{i}", reset=True)
+            cost = pipe(m, self.sums[i], stage_b, f"candidate_cost{i}")
+            if rounds > 1:
+                held = Signal(entry, name=f"held{i}", reset_less=True)
+                m.d.sync += held.eq(store.read(round_a))
+                fresh = slots.first(stage_b)
+            else:
+                held = store.read(0)
+            if i == 0 and rounds == 1:
+                wins = ok            # every right pixel's first candidate: always fresh
+            else:
+                empty = held.empty | fresh if i == 0 else held.empty
+                wins = ok & (empty | better(cost, held.cost))
+            updated = Signal(entry, name=f"updated{i}")
+            m.d.comb += updated.eq(Mux(wins, Cat(cost, first_disparity + i, Const(0, 1)),
+                                       held))
+            updated_words.append(updated)
+        for i, store in enumerate(stores):
+            if i:
+                store.write(round_b, updated_words[i - 1], writing)
+            elif rounds > 1:
+                # The last unit's word j becomes unit 0's word j + 1 (none after R-1).
+                store.write(Mux(round_b == rounds - 1, 0, round_b + 1), updated_words[-1],
+                            writing & ~last)
+        leaving = Signal(name="right_final_valid")
+        final = Signal(d_bits, name="right_final", reset_less=True)
+        m.d.sync += leaving.eq(writing & last)
+        m.d.sync += final.eq(updated_words[-1].d)
+        return final, leaving
+
+    def _check(self, m, slots, final, leaving):
+        """History of dR, the left winners' store and the check itself.
+
+        Both stores may become block RAM (D words and more): they are read synchronously
+        and their data pass a plain register (the RAM's own output register on ECP5)
+        before any logic, and no word is read in the clock it is written (no_rw_check).
+        """
+        p = self.params
+        depth, size = p.disparities, self.history_depth
+        d_bits = bits_for(depth - 1)
+        layout = tag_layout(p)
+        index_shape = unsigned(bits_for(size - 1))
+
+        # The left winners, stored by position index.
+        waiting_layout = data.StructLayout({"tag": layout, "d": unsigned(d_bits)})
+        m.submodules.left_winners = waiting = Memory(shape=waiting_layout, depth=size,
+                                                     init=[], attrs={"no_rw_check": 1})
+        left_read, left_write = waiting.read_port(domain="sync"), waiting.write_port()
+        left_count = Signal(index_shape, name="left_count")
+        arriving = slots.first(self.left_offset) & self.left_tag.valid
+        with m.If(arriving):
+            m.d.sync += left_count.eq(left_count + 1)
+        m.d.comb += [left_write.addr.eq(left_count), left_write.en.eq(arriving),
+                     left_write.data.eq(Cat(self.left_tag, self.disparity))]
+
+        # dR leaving the chain belongs to position n - D + 1 when position n leaves it;
+        # then the left winner of position n - D has all its partners.
+        m.submodules.right_history = history = Memory(shape=unsigned(d_bits), depth=size,
+                                                      init=[], attrs={"no_rw_check": 1})
+        history_read, history_write = history.read_port(domain="sync"), history.write_port()
+        exit_count = Signal(index_shape, name="exit_count")
+        primed = Signal(name="primed")          # D positions have left since reset
+        seen = Signal(range(depth + 1), name="exits_seen")
+        with m.If(leaving):
+            m.d.sync += exit_count.eq(exit_count + 1)
+            with m.If(seen != depth):
+                m.d.sync += seen.eq(seen + 1)
+        m.d.comb += primed.eq(_primed(seen, depth))
+        m.d.comb += [history_write.addr.eq(exit_count - depth + 1),
+                     history_write.en.eq(leaving), history_write.data.eq(final),
+                     left_read.addr.eq(exit_count - depth)]
+        # Clock 1: the RAM; 2: its output register; 3: the partner's address; 4: the RAM;
+        # 5: its output register; 6: the check's result.
+        entry = pipe(m, left_read.data, 1, "checked_left")
+        checked_index = pipe(m, exit_count - depth, 2, "checked_index")
+        partner_address = Signal(index_shape, name="partner_address", reset_less=True)
+        m.d.sync += partner_address.eq(checked_index - entry.d)
+        m.d.comb += history_read.addr.eq(partner_address)
+        partner = pipe(m, history_read.data, 1, "partner")
+        checked = pipe(m, entry, 3, "checked_left_late")
+        stage = pipe(m, Cat(leaving, primed), 5, "check_pulse", reset=True)
+        kept = checked.tag.x >= checked.d
+        if p.lr_threshold is not None:
+            kept = kept & _consistent(absolute_difference(checked.d, partner), p.lr_threshold)
+        m.d.sync += [
+            self.retire.eq(stage[0]),
+            self.produce.eq(stage[0] & stage[1] & self._in_frame(checked.tag)),
+            self.valid.eq(kept & (checked.tag.x >= p.first_valid_column)),
+            self.disparity_out.eq(checked.d),
+            self.x.eq(checked.tag.x), self.y.eq(checked.tag.y),
+        ]

@@ -12,7 +12,7 @@ from amaranth.lib.wiring import In, Out
 
 from .common import absolute_difference, delay
 from .plan import cost_plan
-from .trees import DEFAULT_EVERY, build_popcount, build_sum
+from .trees import DEFAULT_EVERY, build_popcount, build_sad
 
 __all__ = ["MatchingCost"]
 
@@ -68,10 +68,9 @@ class MatchingCost(wiring.Component):
         return build_popcount(m, self.en, bits, self.plan)
 
     def _ext_census_cost(self, m):
-        differences = [absolute_difference(self.left.word_select(n, 8),
-                                           self.right.word_select(n, 8))
-                       for n in range(self.params.neighbours)]
-        return build_sum(m, self.en, differences, self.plan)
+        pairs = [(self.left.word_select(n, 8), self.right.word_select(n, 8))
+                 for n in range(self.params.neighbours)]
+        return build_sad(m, self.en, pairs, self.plan)[:self.params.cost_bits]
 
     def elaborate(self, platform):
         m = Module()

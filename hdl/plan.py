@@ -1,36 +1,40 @@
 """Hardware facts of a configuration, as pure functions of the parameters.
 
 What gen/, sim/ and the tests need to know about a core -- the output word width, the
-latency, the cycles per frame, the memory bits, whether it can be built at all -- and the
-register plans and latencies that the components themselves use for their ``latency``
-attributes. Nothing here constructs or elaborates a component, so a caller can ask for a
-number without building the design; and since the components read their plans from here,
-the numbers cannot drift from what they build (``tests/test_hdl_plan.py`` also measures
-them on the elaborated hardware).
+latency, the cycles per frame, the memories and their bits, whether it can be built at all
+-- and the register plans and clock offsets that the components themselves use for their
+``latency`` attributes and their internal timing. Nothing here constructs or elaborates a
+component, so a caller can ask for a number without building the design; and since the
+components read their plans from here, the numbers cannot drift from what they build
+(``tests/test_hdl_plan.py`` also measures them on the elaborated hardware, and
+``tests/test_report.py`` checks the memories against Yosys).
+
+Offsets are clocks after a slot's first clock (its admission, see :mod:`.core`); a value
+*at* an offset is slot-aligned there (see :mod:`.common`).
 """
 
+from dataclasses import dataclass
+
 from ..params import ParameterError
-from .trees import DEFAULT_EVERY, popcount_plan, register_plan
+from .common import tag_layout
+from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
-           "transform_plan", "cost_plan", "min_tree_plan", "input_latency",
-           "aggregation_latency", "aggregation_offset", "calculation_latency",
-           "LR_CLOCK_LATENCY", "lr_latency",
-           "latency", "cycles_per_frame", "memory_bits"]
+           "transform_plan", "cost_plan", "min_tree_plan", "INPUT_LATENCY", "cost_rows",
+           "vertical_bits", "aggregation_latency", "CalculationTiming", "calculation_timing",
+           "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
+           "cycles_per_frame", "Memory", "memories", "memory_bits"]
 
 #: Widest frame the hardware is generated for. 8192 covers 8K video (7680); the line
-#: buffers are W deep and the cost line buffer W * R, so a wider frame only grows memories
-#: no FPGA of the paper's class holds next to the logic (census 9x9, D = 100 at 8192:
-#: 12.5 Mbit), while generation time grows with the depth of every memory.
+#: buffers are W deep (the costs line buffer W * R), so a wider frame only grows memories
+#: no FPGA of the paper's class holds next to the logic, while generation time grows with
+#: the depth of every memory.
 MAX_WIDTH = 8192
-#: Largest transform window. The paper sweeps 7 .. 19; at 31 x 31 the census transform is
-#: 960 bits and the right-transform ring of D = 100 already holds 96,000 flip-flops (the
-#: ext. census 19 x 19, 288,000 of them, does not fit the paper's EP2S180), and generation
-#: time grows with B^2 per cost unit.
+#: Largest transform window. The paper sweeps 7 .. 19; at 31 x 31 an extended census word
+#: is 7,680 bits and the stores of the right transforms hold D of them; generation time
+#: grows with B^2 per cost unit.
 MAX_BLOCK = 31
-#: Largest disparity range. The ring, the L/R check's slots and its D:1 partner
-#: multiplexer grow linearly with D (the paper: 100); 256 is the most an 8-bit disparity
-#: word holds.
+#: Largest disparity range: 256 is the most an 8-bit disparity word holds.
 MAX_DISPARITIES = 256
 
 
@@ -65,129 +69,248 @@ def output_width(params):
 
 def _unit_plan(tree, params, every, depth):
     """Register plan of a unit over the k neighbours: ``tree`` "popcount" (of k bits),
-    "sum" (of k values) or None (one value); ``depth`` levels of logic in front of it
-    count against the register spacing, and the result is registered (``every`` > 0)."""
+    "sum" (of k values), "sad" (of k absolute differences, see trees.sad_leaves) or None
+    (one value); ``depth`` levels of logic in front of it count against the register
+    spacing, and the result is registered (``every`` > 0)."""
     registered = every > 0
     if tree == "popcount":
         return popcount_plan(params.neighbours, every, depth, registered)
+    if tree == "sad":
+        return sad_plan(params.neighbours, every, depth, registered)
     return register_plan(params.neighbours if tree == "sum" else 1, every, depth, registered)
 
 
 def transform_plan(params, every=DEFAULT_EVERY):
     """Register plan of ``params.transform``; ``sum()`` of it is the transform's latency.
 
-    One level of logic (a comparison or an absolute difference) sits in front of every
-    tree and counts against the register spacing. Census and ext. census have no tree:
-    that level, then the output register.
+    One level of logic (a comparison or an absolute difference) sits in front of the rank
+    popcount and of the census and ext. census output registers; the ext. rank sum of
+    absolute differences counts its subtraction itself.
     """
-    tree = {"rank": "popcount", "ext-rank": "sum"}.get(params.transform)
-    return _unit_plan(tree, params, every, 1)
+    tree = {"rank": "popcount", "ext-rank": "sad"}.get(params.transform)
+    return _unit_plan(tree, params, every, 0 if tree == "sad" else 1)
 
 
 def cost_plan(params, every=DEFAULT_EVERY):
     """Register plan of the matching cost; ``sum()`` of it is the cost unit's latency.
 
     The census cost's XOR in front of the popcount is one LUT level, far shorter than an
-    adder level, and is not counted against the spacing; the absolute differences of the
-    other costs are. Rank and ext. rank costs are one absolute difference.
+    adder level, and is not counted against the spacing; the ext. census sum of absolute
+    differences counts its subtraction itself; rank and ext. rank costs are one absolute
+    difference.
     """
-    tree = {"census": "popcount", "ext-census": "sum"}.get(params.transform)
-    return _unit_plan(tree, params, every, 0 if params.transform == "census" else 1)
+    tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
+    return _unit_plan(tree, params, every, 1 if tree is None else 0)
 
 
 def min_tree_plan(params, every=DEFAULT_EVERY):
-    """Register plan of the partition's WTA over D/R aggregated costs."""
-    return register_plan(params.per_round, every)
+    """Register plan of the partition's WTA over D/R aggregated costs: a register after
+    every level (a level is a comparison whose result selects the whole (cost, index)
+    pair; two of them do not fit a 150 MHz clock on ECP5)."""
+    return register_plan(params.per_round, 1 if every else 0)
 
 
-# Latencies of the stages -------------------------------------------------------------------
+# Offsets of the stages ---------------------------------------------------------------------
 
-def input_latency(params):
-    """Positions from a pixel's entry to the window centred on it: r rows and r columns
-    (the window is complete after the advance of the pixel r rows and r columns later)."""
-    return params.radius * params.width + params.radius
-
-
-#: Clocks of the vertical aggregation: the cost line buffer's address register, its read,
-#: its data register and the registered column sums; then the registered row sum.
-_VERTICAL_CLOCKS, _HORIZONTAL_CLOCKS = 4, 1
+#: Clocks from the admission of a pixel to the window: the line buffers' block RAM read,
+#: its output register, the window's shift.
+INPUT_LATENCY = 3
 
 
-def aggregation_latency(params):
-    """Register stages (clocks) from the costs to their A x A sums; 0 for A = 1.
+def cost_rows(params):
+    """Rows whose costs each cost unit computes: A when the rows above are kept as
+    transformed pixels (``stored_rows == "transforms"``), else 1."""
+    return params.aggregation if params.agg_radius and params.stored_rows == "transforms" else 1
 
-    The sums that leave with a position's costs are those of the window centred a rows
-    and a columns earlier (:func:`aggregation_offset`).
+
+def vertical_bits(params):
+    """Width of a vertical (column) sum of A costs."""
+    return (params.max_cost * params.aggregation).bit_length()
+
+
+#: Clocks of the vertical sum from stored costs: the address register, the block RAM read,
+#: its output register, the adders' register, then one more register.
+VERTICAL_CLOCKS = 5
+
+
+def aggregation_latency(params, every=DEFAULT_EVERY):
+    """Clocks from the aggregation's input to its A x A sums (0 for A = 1).
+
+    The vertical sum from stored costs (``stored_rows == "costs"``), then the horizontal
+    sum: the registered taps, then the tree of 2a + 1 terms.
     """
-    return _VERTICAL_CLOCKS + _HORIZONTAL_CLOCKS if params.agg_radius else 0
+    a = params.agg_radius
+    if not a:
+        return 0
+    vertical = VERTICAL_CLOCKS if params.stored_rows == "costs" else 0
+    return vertical + 1 + sum(register_plan(2 * a + 1, every, 0, True))
 
 
-def aggregation_offset(params):
-    """Positions the aggregation window's centre trails the newest costs: a rows and a
-    columns."""
-    return params.agg_radius * (params.width + 1)
+@dataclass(frozen=True)
+class CalculationTiming:
+    """Offsets inside the calculation stage, in clocks after its input (the windows)."""
+    transformed: int    #: transforms (and the rows above) of a position, slot-aligned
+    stored: int         #: round 0 of the right-transform stores' reads
+    costed: int         #: masked costs (row costs) of a round
+    vertical: int       #: costs or vertical sums at the aggregation's input
+    sums: int           #: aggregated sums of the aggregation centre
+    min_tree: int       #: clocks of the partition's minimum tree
+    latency: int        #: the partition winner (registered)
 
 
-def calculation_latency(params, every=DEFAULT_EVERY):
-    """``(positions, clocks)`` of the calculation stage.
+def calculation_timing(params, every=DEFAULT_EVERY):
+    """The calculation stage's offsets (see :mod:`.calculation_stage`).
 
-    Positions from the window centred on a pixel to the rounds of its costs: the
-    transform's registers and the position register each load on an advance, and the
-    rounds run in the position after the last of them. Then clocks from a round to its
-    partition winner: the cost unit, the aggregation's register stages and the minimum
-    tree.
+    The transform units' results; with the rows above recomputed, the block RAM of
+    transformed rows is read in round 0 and its word passes the RAM's output register, so
+    the current row waits for it (at least 2 clocks). The stores are read a clock after
+    the newest word is written; their read register precedes the cost units; the cost
+    masks take two registers (x - j*D/R, then one comparison per unit), so at least 3
+    clocks pass from the stores to the masked costs. With A rows the row costs are summed
+    (registered); a single row's cost is registered once.
     """
-    positions = sum(transform_plan(params, every)) + 2
-    clocks = (sum(cost_plan(params, every)) + aggregation_latency(params)
-              + sum(min_tree_plan(params, every)))
-    return positions, clocks
+    transform_latency = sum(transform_plan(params, every))
+    rows = cost_rows(params)
+    transformed = max(transform_latency, 2) if rows > 1 else transform_latency
+    stored = transformed + 1
+    costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
+    vertical = costed + (sum(register_plan(rows, every, 0, True)) if rows > 1 else 1)
+    sums = vertical + aggregation_latency(params, every)
+    min_tree = sum(min_tree_plan(params, every))
+    return CalculationTiming(transformed, stored, costed, vertical, sums, min_tree,
+                             sums + min_tree + 1)
 
 
-#: Clocks from the L/R check's result to its registered output (the partner lookup and
-#: the consistency test are registered once more before the output queue).
-LR_CLOCK_LATENCY = 1
+#: Offset (after the L/R stage's input) where its units read their stores: the candidates'
+#: flags take two registers (x - j*D/R, then one comparison per unit).
+LR_STAGE_A = 2
 
 
-def lr_latency(params):
-    """Positions the left winners wait for every possible partner's dR: D + 1 (0 without
-    the check); the result then leaves in the first round of that position."""
-    return params.disparities + 1 if params.lr_check else 0
+@dataclass(frozen=True)
+class LRTiming:
+    """Offsets inside the L/R check, in clocks after its input (the aggregated sums)."""
+    left: int           #: where the left winners arrive (slot-aligned)
+    exit: int           #: a final dR leaves the last unit (0 without the check)
+    history: int        #: words of the left winners' store and of the dR history
+    latency: int        #: the retire pulse and the output word
 
 
-def latency(params, every=DEFAULT_EVERY):
-    """Flush positions of a frame: without stalls a frame takes (W x H + latency) x R
-    clocks (:func:`cycles_per_frame`).
+def lr_timing(params, left):
+    """The L/R check's offsets, for left winners arriving ``left`` clocks after the sums.
 
-    A pixel enters in the last round of its position. Its output word is produced in the
-    position ``input_latency`` + the calculation stage's positions + the aggregation's
-    centre offset + ``lr_latency`` later, in the clock the calculation stage's clocks and
-    ``LR_CLOCK_LATENCY`` after that position's first round (plus R - 1 without the check,
-    whose result leaves in the last round instead of the first). After a frame's last word
-    the core takes the next frame's first pixel in the next last round from the following
-    clock on (the enable is a register): the positions up to that one are the flush.
+    The last unit's stage B of round R-1 (LR_STAGE_A + 1 + R - 1), then a register: the
+    final dR. Its check then takes 6 clocks (left winners' RAM and its output register,
+    the partner's address, the history RAM and its output register, the result). The
+    stores are indexed by position: the left side writes ``left`` clocks after the input,
+    the check reads at ``exit``; in between the left side runs ahead by up to
+    ceil((exit - left) / R) + 1 positions, and the history is read 3 clocks after
+    ``exit`` while up to 3 more positions write it.
     """
-    positions, clocks = calculation_latency(params, every)
-    positions += input_latency(params) + aggregation_offset(params) + lr_latency(params)
-    produced = clocks + LR_CLOCK_LATENCY + (0 if params.lr_check else params.rounds - 1)
+    if not params.lr_check:
+        return LRTiming(left, 0, 0, left + 1)
     rounds = params.rounds
-    return positions + -(-(produced + 2 - 2 * rounds) // rounds)
+    exit_ = LR_STAGE_A + 1 + rounds
+    ahead = max(-(-(exit_ - left) // rounds) + 1, 0)
+    history = 1 << (params.disparities + ahead + 6 - 1).bit_length()
+    return LRTiming(left, exit_, history, exit_ + 6)
 
 
-def cycles_per_frame(params, every=DEFAULT_EVERY):
-    """Clocks per frame without stalls: (W x H pixels + flush positions) x R rounds.
+@dataclass(frozen=True)
+class CoreTiming:
+    """Offsets of the stages' inputs, in clocks after a slot's admission."""
+    calculation: int    #: the windows (calculation stage's input)
+    sums: int           #: the aggregated sums (L/R check's input)
+    evaluation: int     #: the partition winners (evaluation stage's input)
+    left: int           #: the left winners (slot-aligned)
+    output: int         #: a position's retire pulse and word, before the output queue
+    queue_depth: int    #: words of the output queue
 
-    After the frame's last pixel the core feeds :func:`latency` dummy positions until the
-    frame's last output word is out; the next frame's first pixel waits for that.
+
+def core_timing(params, every=DEFAULT_EVERY):
+    """The core's offsets, and the output queue's depth: every position in flight between
+    admission and the queue must find room for its word (a credit is taken at admission),
+    plus a few words so that a steady stream never waits for a credit."""
+    calculation = INPUT_LATENCY
+    timing = calculation_timing(params, every)
+    sums = calculation + timing.sums
+    evaluation = calculation + timing.latency
+    left = evaluation + params.rounds                 # the evaluation stage's latency
+    output = sums + lr_timing(params, left - sums).latency
+    depth = 1 << (-(-output // params.rounds) + 4).bit_length()
+    return CoreTiming(calculation, sums, evaluation, left, output, depth)
+
+
+def latency(params):
+    """Positions from a pixel's admission to the admission of the position that completes
+    its output word: the window's centre trails the newest pixel by r rows and r columns,
+    the aggregation centre the window's by a rows and a columns, and the L/R check waits
+    D positions (positions are raster-continuous, so a row is W of them).
+
+    After the last frame of a stream the core feeds this many dummy positions (the flush);
+    a frame that follows at once needs none (its own pixels push the previous one out).
     """
-    return (params.width * params.height + latency(params, every)) * params.rounds
+    p = params
+    lag = (p.radius + p.agg_radius) * (p.width + 1)
+    return lag + (p.disparities if p.lr_check else 0)
 
 
-def memory_bits(params):
-    """Bits the core's memories must hold (docs/hardware.md, "Memories").
+def cycles_per_frame(params):
+    """Clocks per frame without stalls, frames back to back: W x H x R.
 
-    Two image line buffers of B-1 lines of 8-bit pixels, and (aggregation A > 1) the cost
-    line buffer of A-1 lines of D costs per column.
+    A frame that starts right after the previous one overlaps its flush (the input stage
+    keeps the finishing frame's coordinates for its last centres), so each frame costs
+    exactly its W x H slots. A frame after a pause (idle input) is flushed with
+    :func:`latency` dummy positions, which the pause covers.
     """
-    lines = 2 * params.width * 8 * (params.block - 1)
-    costs = params.width * (params.aggregation - 1) * params.disparities * params.cost_bits
-    return lines + costs
+    return params.width * params.height * params.rounds
+
+
+# Memories ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Memory:
+    """One kind of memory of the core: ``count`` memories of ``depth`` words of ``width``
+    bits, and what holds them."""
+    name: str
+    count: int
+    depth: int
+    width: int
+
+    @property
+    def bits(self):
+        return self.count * self.depth * self.width
+
+
+def memories(params, every=DEFAULT_EVERY):
+    """Every memory of the core for ``params`` (with width and height), as the components
+    build them (docs/hardware.md, "Memories")."""
+    p = params
+    units, rounds, a = p.per_round, p.rounds, p.agg_radius
+    result = [Memory("input lines", 2, p.width, 8 * (p.block - 1))]
+    rows = cost_rows(p)
+    if rows > 1:
+        result.append(Memory("transform lines", 1, p.width, 2 * (rows - 1) * p.transform_bits))
+    if a and p.stored_rows == "costs":
+        result.append(Memory("cost lines", units, p.width * rounds,
+                             (p.aggregation - 1) * p.cost_bits))
+    if rounds > 1:
+        result.append(Memory("right-transform stores", units, rounds, rows * p.transform_bits))
+        if a:
+            result.append(Memory("row taps", units, rounds, 2 * a * vertical_bits(p)))
+    if p.lr_check:
+        d_bits = max(1, (p.disparities - 1).bit_length())
+        timing = core_timing(p, every)
+        history = lr_timing(p, timing.left - timing.sums).history
+        if rounds > 1:
+            result.append(Memory("right winners", units, rounds,
+                                 p.aggregated_cost_bits + d_bits + 1))
+        result.append(Memory("left winners", 1, history, tag_layout(p).size + d_bits))
+        result.append(Memory("dR history", 1, history, d_bits))
+    depth = core_timing(p, every).queue_depth
+    result.append(Memory("output queue", 1, depth - 1, output_width(p) + 2))
+    return result
+
+
+def memory_bits(params, every=DEFAULT_EVERY):
+    """Bits the core's memories hold (what Yosys counts in its ``$mem_v2`` cells)."""
+    return sum(memory.bits for memory in memories(params, every))

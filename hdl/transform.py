@@ -17,7 +17,7 @@ from amaranth.lib.wiring import In, Out
 
 from .common import absolute_difference, delay
 from .plan import transform_plan
-from .trees import DEFAULT_EVERY, build_popcount, build_sum
+from .trees import DEFAULT_EVERY, build_popcount, build_sad
 
 __all__ = ["xi", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
 
@@ -94,8 +94,8 @@ class ExtRank(_WindowTransform):
     """Eq. 7: sum of |P - P'| over the neighbours (differences, then an adder tree)."""
 
     def _value(self, m, centre, neighbours):
-        differences = [absolute_difference(centre, p) for p in neighbours]
-        return build_sum(m, self.en, differences, self.plan)
+        total = build_sad(m, self.en, [(centre, p) for p in neighbours], self.plan)
+        return total[:self.params.transform_bits]
 
 
 class ExtCensus(_WindowTransform):

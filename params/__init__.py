@@ -12,10 +12,16 @@ loaders and pipeline, file names in the commands.
 
 from dataclasses import dataclass, replace
 
-__all__ = ["TRANSFORMS", "UserError", "ParameterError", "StereoParams"]
+__all__ = ["TRANSFORMS", "LINE_BUFFERS", "UserError", "ParameterError", "StereoParams"]
 
 #: Transform names as the command line spells them, in the paper's order.
 TRANSFORMS = ("rank", "census", "ext-rank", "ext-census")
+
+#: What the hardware keeps of the rows above for the vertical aggregation: the matching
+#: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
+#: (the costs of those rows are computed again, A cost units per disparity); "auto" takes
+#: whichever is cheaper overall for the transform (docs/hardware.md).
+LINE_BUFFERS = ("auto", "costs", "transforms")
 
 
 class UserError(Exception):
@@ -59,6 +65,9 @@ class StereoParams:
         Left/right consistency threshold T (>= 0); ``None`` disables the check.
     width, height : int or None
         Frame size. Required by the hardware; the golden model takes it from the images.
+    line_buffer : str
+        One of :data:`LINE_BUFFERS`: the hardware's memory for the vertical aggregation.
+        It changes resources, never a result.
     """
 
     transform: str = "census"
@@ -69,6 +78,7 @@ class StereoParams:
     lr_threshold: int | None = 3
     width: int | None = None
     height: int | None = None
+    line_buffer: str = "auto"
 
     def __post_init__(self):
         if self.transform not in TRANSFORMS:
@@ -101,6 +111,9 @@ class StereoParams:
         if self.height is not None:
             if not _is_int(self.height) or self.height < 1:
                 raise ParameterError(f"image height must be an integer >= 1, not {self.height!r}")
+        if self.line_buffer not in LINE_BUFFERS:
+            raise ParameterError(f"line buffer must be one of {', '.join(LINE_BUFFERS)}, "
+                                 f"not {self.line_buffer!r}")
 
     def with_size(self, width, height):
         """The same configuration for a ``width`` x ``height`` frame (validated)."""
@@ -140,6 +153,17 @@ class StereoParams:
         windows also every right-image pixel the aggregation touches lies inside the image.
         """
         return self.disparities - 1 + max(1, self.agg_radius)
+
+    @property
+    def stored_rows(self):
+        """What the hardware stores of the rows above: "costs" or "transforms".
+
+        "auto" keeps transformed pixels, except for the extended census, whose cost (k
+        byte-wise absolute differences and their sum) is too large to compute A times.
+        """
+        if self.line_buffer != "auto":
+            return self.line_buffer
+        return "costs" if self.transform == "ext-census" else "transforms"
 
     @property
     def lr_check(self):

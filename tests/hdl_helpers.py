@@ -80,11 +80,13 @@ class _StreamPorts:
 
 
 def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None,
-                 stream=False):
-    """Feed ``beats`` (and RESET markers) through a core; collect every output word.
+                 stream=False, before_start=None):
+    """Feed ``beats`` (RESET markers: a reset; an int n: n idle clocks) through a core;
+    collect every output word.
 
     The source keeps a beat offered until it is taken (AXI rule) but inserts random gaps
-    before offering the next; the sink drops ``tready`` at random. With ``stream`` the
+    before offering the next; the sink drops ``tready`` at random. ``before_start(ctx)``
+    runs in the testbench before the first clock. With ``stream`` the
     core is a :class:`StereoStream`, driven through its sink and source.
 
     Returns
@@ -92,7 +94,8 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
     dict
         ``words`` (list of (tdata, tuser, tlast)), ``errors`` (framing-error pulses),
         ``frame_starts`` (clock of every output word with tuser), ``cycles`` (clocks until
-        the last word came out), ``latency`` (the core's, in positions).
+        the last word came out), ``last_input`` (the clock the last beat was taken),
+        ``latency`` (the core's, in positions).
     """
     dut = StereoStream(params) if stream else NpStereoCore(params)
     ports = _StreamPorts(dut) if stream else _AxiPorts(dut)
@@ -100,13 +103,17 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
     top = ResetInserter({"sync": rst})(dut)
     rng = random.Random(seed)
     words, starts, state = [], [], {"errors": 0, "cycles": 0}
-    expected = sum(1 for b in beats if b != RESET)
+    beats = list(beats)
+    expected = sum(1 for b in beats if b != RESET and not isinstance(b, int))
     slack = 4 * dut.latency * params.rounds + 50
     limit = max_cycles or int((expected * params.rounds + slack * 3)
                               / min(valid_prob, ready_prob) + slack)
 
     async def bench(ctx):
+        if before_start is not None:
+            before_start(ctx)
         index, cycle, last_word_cycle, offering = 0, 0, 0, False
+        state["last_input"] = None
         while cycle < limit:
             if index < len(beats) and beats[index] == RESET:
                 ctx.set(ports.in_valid, 0)
@@ -117,7 +124,13 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
                 index, offering = index + 1, False
                 cycle += 1
                 continue
-            if not offering and index < len(beats):
+            if index < len(beats) and isinstance(beats[index], int) and beats[index] > 0:
+                # An idle gap: no beat offered for that many clocks.
+                beats[index] -= 1
+                if not beats[index]:
+                    index += 1
+                offering = False
+            elif not offering and index < len(beats):
                 offering = rng.random() < valid_prob
             if offering:
                 ports.offer(ctx, beats[index])
@@ -126,6 +139,7 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
             ctx.set(ports.out_ready, ready)
             if offering and ctx.get(ports.in_ready):
                 index, offering = index + 1, False
+                state["last_input"] = cycle
             if ready and ctx.get(ports.out_valid):
                 word = ports.word(ctx)
                 words.append(word)

@@ -191,8 +191,13 @@ def test_broken_comparison_is_caught(monkeypatch):
 
 
 def test_broken_tie_rule_is_caught(monkeypatch):
-    """Ties kept at the highest disparity (``<=`` in the WTA comparisons)."""
-    monkeypatch.setattr(golden_wta, "_better", np.less_equal)
+    """Ties kept at the highest disparity instead of the lowest."""
+    def higher_wins_ties(cost, disparity, best_cost, best_disparity, out):
+        np.equal(cost, best_cost, out=out)
+        out &= np.greater(disparity, best_disparity)
+        out |= np.less(cost, best_cost)
+        return out
+    monkeypatch.setattr(golden_wta, "_beats", higher_wins_ties)
     assert broken_case_differs()
 
 

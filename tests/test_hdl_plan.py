@@ -1,7 +1,7 @@
 """``hdl/plan.py``: the hardware facts, checked against the elaborated hardware.
 
-The latency and the cycles per frame against the frame period measured in Amaranth's
-simulator; the output word width against the core's port and the generated Verilog; the
+The cycles per frame against the frame period measured in Amaranth's simulator (frames
+back to back), the latency against the flush after a lone frame; the output word width against the core's port and the generated Verilog; the
 size limits of :func:`check_buildable`. (The memory bits are checked against Yosys in
 ``tests/test_report.py``, the units' latencies by the stream comparisons of
 ``tests/test_hdl_units.py``, which align outputs by them.)
@@ -11,6 +11,7 @@ import re
 
 import pytest
 from amaranth.hdl import Fragment
+from amaranth.sim import Simulator
 
 from npstereo.hdl import plan
 from npstereo.hdl.core import NpStereoCore
@@ -43,19 +44,67 @@ def measured_period(params):
     return periods.pop()
 
 
+def measured_flush(params):
+    """Clocks from the admission of a frame's last pixel to its last output word entering
+    the output queue, for a frame followed by no other (the core flushes)."""
+    core = NpStereoCore(params)
+    pair = stereo_pair("independent", params.height, params.width, 1)
+    beats = frame_beats(*pair)
+    events = {"admitted": [], "last_word": None}
+
+    async def bench(ctx):
+        index = 0
+        for clock in range(len(beats) * params.rounds + 40 * plan.latency(params)
+                           * params.rounds):
+            offering = index < len(beats)
+            if offering:
+                data, user, last = beats[index]
+                ctx.set(core.s_axis_tdata, data)
+                ctx.set(core.s_axis_tuser, user)
+                ctx.set(core.s_axis_tlast, last)
+            ctx.set(core.s_axis_tvalid, offering)
+            ctx.set(core.m_axis_tready, 1)
+            if offering and ctx.get(core.s_axis_tready):
+                index += 1
+            if ctx.get(core.input_stage.admit):
+                events["admitted"].append(clock)
+            lr = core.lr_check
+            if (ctx.get(lr.produce) and ctx.get(lr.x) == params.width - 1
+                    and ctx.get(lr.y) == params.height - 1):
+                events["last_word"] = clock
+                break
+            await ctx.tick()
+
+    sim = Simulator(core)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+    last_pixel = events["admitted"][params.width * params.height - 1]
+    return events["last_word"] - last_pixel, core.clock_latency
+
+
 @pytest.mark.parametrize("params", PERIODS, ids=lambda p: p.describe().replace(" ", "_"))
 def test_cycles_per_frame_is_the_measured_period(params):
+    """Frames back to back: W x H x R clocks each, no flush between them."""
     params = params.with_size(24, 6)
-    assert measured_period(params) == plan.cycles_per_frame(params) == (
-        (24 * 6 + plan.latency(params)) * params.rounds)
+    assert measured_period(params) == plan.cycles_per_frame(params) == 24 * 6 * params.rounds
 
 
-def test_a_wrong_latency_fails_the_period_check():
-    """Broken variant: the flush one position shorter (or longer) is not the period."""
+@pytest.mark.parametrize("params", PERIODS, ids=lambda p: p.describe().replace(" ", "_"))
+def test_latency_is_the_measured_flush(params):
+    """After a frame's last pixel the flush admits a dummy position every R clocks; the
+    last word leaves ``latency`` positions and the output offset later."""
+    params = params.with_size(24, 6)
+    flush, output = measured_flush(params)
+    assert flush == plan.latency(params) * params.rounds + output
+
+
+def test_a_wrong_latency_fails_the_flush_check():
+    """Broken variant: the flush one position shorter (or longer) is not what is measured."""
     params = PERIODS[1].with_size(24, 6)
-    period = measured_period(params)
+    flush, output = measured_flush(params)
     for wrong in (plan.latency(params) - 1, plan.latency(params) + 1):
-        assert period != (24 * 6 + wrong) * params.rounds
+        assert flush != wrong * params.rounds + output
 
 
 @pytest.mark.parametrize("disparities,width", [(2, 8), (128, 8), (129, 16), (256, 16)])

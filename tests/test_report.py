@@ -112,21 +112,22 @@ def test_small_core_report_and_cache(tmp_path):
     assert again["results"]["cyclonev"]["logic"] == result["logic"]
 
 
-#: Shapes of the memory formula beyond test_small_core_report_and_cache's census 3x3, A = 3:
-#: the cost line buffer's A - 1 = 4 rows of D costs at another cost width (11 bits), and
-#: none without aggregation next to line buffers of B - 1 = 4 rows.
+#: Shapes of the memory formula beyond test_small_core_report_and_cache's census 3x3, A = 3
+#: (rows above as transforms): the rows above as costs (the cost lines, A - 1 = 4 rows at
+#: 11 bits), R = 1 (stores are registers, not memories), no aggregation and no L/R check.
 MEMORY_SHAPES = [
     StereoParams(transform="ext-rank", block=3, disparities=4, rounds=2, aggregation=5,
+                 width=16, height=4, line_buffer="costs"),
+    StereoParams(transform="census", block=3, disparities=4, rounds=1, aggregation=3,
                  width=16, height=4),
-    StereoParams(transform="rank", block=5, disparities=4, rounds=1, aggregation=1,
+    StereoParams(transform="rank", block=5, disparities=4, rounds=2, aggregation=1,
                  lr_threshold=None, width=16, height=4),
 ]
 
 
 def _wrong_memory_bits(params):
-    """Broken variant of the formula: B rows per line buffer, A rows of costs."""
-    return (2 * params.width * 8 * params.block
-            + params.width * params.aggregation * params.disparities * params.cost_bits)
+    """Broken variant of the formula: line buffers of B rows instead of B - 1."""
+    return plan.memory_bits(params) + 2 * params.width * 8
 
 
 @pytest.mark.parametrize("params", MEMORY_SHAPES, ids=lambda p: p.describe().replace(" ", "_"))
@@ -213,8 +214,9 @@ def test_cli_single_configuration(tmp_path, capsys):
     assert "ALUT" in out and "cycles per frame" in out
     document = json.loads(json_path.read_text())
     result = document["reports"][0]["results"]["cyclonev"]
-    # Only the two image line buffers (A = 1: no cost lines): 2 x 16 columns x 2 lines x 8.
-    assert result["memory_bits"] == 2 * 16 * 2 * 8
+    params = StereoParams(transform="rank", block=3, disparities=4, rounds=2, aggregation=1,
+                          lr_threshold=None, width=16, height=4)
+    assert result["memory_bits"] == plan.memory_bits(params)
 
 
 def test_sweep_outputs_ratios_and_plots(tmp_path):
