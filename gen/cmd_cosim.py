@@ -19,7 +19,7 @@ from ..golden.synthetic import synthetic_pair
 from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
 from ..params import UserError
 from ..sim.cosim import SIMULATORS, CosimError, run_frame
-from .cmd_match import add_matching_arguments, params_from_args
+from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
 from .images import save_disparity_png
 
 __all__ = ["add_parser", "run", "parse_crop", "print_verdict"]
@@ -116,6 +116,7 @@ def add_parser(subparsers):
                         help="a seeded synthetic scene instead of a dataset")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scene")
     add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_hardware_arguments(parser)
     parser.add_argument("--crop", help="simulate only the central WIDTHxHEIGHT pixels "
                         f"(the hardware takes at most {MAX_WIDTH} columns)")
     parser.add_argument("--clock-mhz", type=float, default=100.0,

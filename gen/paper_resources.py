@@ -32,9 +32,10 @@ PAPER_SIZE = (450, 375)
 PAPER_DISPARITIES, PAPER_ROUNDS = 100, 10
 
 
-def paper_configurations():
-    """The paper's sweep, smallest first so a partial run covers the most configurations."""
+def paper_configurations(line_buffers=("transforms", "costs")):
+    """The paper's sweep, one configuration per transform, block and line buffer (the
+    hardware's two ways to keep the rows above: a user trades block RAM for logic)."""
     width, height = PAPER_SIZE
     return [StereoParams(transform=t, block=b, disparities=PAPER_DISPARITIES,
-                         rounds=PAPER_ROUNDS, width=width, height=height)
-            for b in PAPER_BLOCKS for t in TRANSFORMS]
+                         rounds=PAPER_ROUNDS, width=width, height=height, line_buffer=lb)
+            for b in PAPER_BLOCKS for t in TRANSFORMS for lb in line_buffers]

@@ -91,26 +91,32 @@ def sweep_plots(reports, out):
         The files written.
     """
     colours = dict(zip(TRANSFORMS, ("tab:blue", "tab:orange", "tab:green", "tab:red")))
+    styles = {"transforms": "o-", "costs": "s:", "auto": "o-"}
     panels = [("logic", "cyclonev", "logic", PAPER_LOGIC,
                "logic (ours: Cyclone V ALUTs, paper: Stratix II LEs)"),
               ("memory", "cyclonev", "memory_bits", PAPER_MEMORY, "memory bits")]
     if any(r["results"].get("ecp5", {}).get("fmax_mhz") for r in reports):
         panels.append(("fmax", "ecp5", "fmax_mhz", None, "clock MHz (ours: ECP5 nextpnr)"))
+    buffers = sorted({r["params"].get("line_buffer", "auto") for r in reports})
     written = []
     for name, target, key, figures, label in panels:
-        figure = Figure(figsize=(7, 4.5))
+        figure = Figure(figsize=(7.5, 4.8))
         axes = figure.add_subplot()
         for transform in TRANSFORMS:
-            points = [(r["params"]["block"], r["results"][target][key]) for r in reports
-                      if r["params"]["transform"] == transform
-                      and r["results"].get(target, {}).get("status") == "ok"
-                      and r["results"][target].get(key) is not None]
-            if points:
-                axes.plot(*zip(*points), "o-", color=colours[transform], label=f"{transform} (ours)")
+            for buffer in buffers:
+                points = [(r["params"]["block"], r["results"][target][key]) for r in reports
+                          if r["params"]["transform"] == transform
+                          and r["params"].get("line_buffer", "auto") == buffer
+                          and r["results"].get(target, {}).get("status") == "ok"
+                          and r["results"][target].get(key) is not None]
+                if points:
+                    rows = "" if buffer == "auto" else f", rows above as {buffer}"
+                    axes.plot(*zip(*points), styles[buffer], color=colours[transform],
+                              label=f"{transform}{rows}")
             if figures is not None:
                 values = [(b, v) for b, v in zip(PAPER_BLOCKS, figures[transform])
                           if v is not None]
-                axes.plot(*zip(*values), "x--", color=colours[transform], alpha=0.6,
+                axes.plot(*zip(*values), "x--", color=colours[transform], alpha=0.5,
                           label=f"{transform} (paper)")
         if name == "fmax":
             axes.plot(list(PAPER_CLOCK), list(PAPER_CLOCK.values()), "ks--",

@@ -11,37 +11,48 @@ def _number(value, digits=0):
 
 
 def _row(target, result):
-    if result["status"] != "ok":
+    if result["status"] not in ("ok", "does not fit"):
         return [target, result["status"], result.get("message", "")]
-    return [target, f"{result['logic']:,} {result['logic_unit']}", f"{result['registers']:,}",
+    utilisation = result.get("utilisation") or {}
+    fmax = (result["message"] if result["status"] == "does not fit"
+            else _number(result["fmax_mhz"], 1))
+    return [target, f"{result['logic']:,} {result['logic_unit']}"
+            + (f" ({utilisation['LUT']:.0f} %)" if utilisation else ""),
+            f"{result['registers']:,}",
             f"{result['block_rams']} {result['block_ram_kind']}", str(result["lut_rams"]),
             f"{result['memory_bits']:,}" + (f" (+{result['ffram_bits']:,} in FFs)"
                                              if result["ffram_bits"] else ""),
-            _number(result["fmax_mhz"], 1), _number(result.get("frames_per_second"), 1),
+            _number(result.get("logic_levels"), 1), fmax,
+            _number(result.get("frames_per_second"), 1),
             f"{result['seconds']:.0f}" + (" (cached)" if result.get("cached") else "")]
 
 
 def format_table(report):
     """Plain-text table of one configuration's results."""
     header = ["target", "logic", "registers", "block RAM", "LUT RAM", "memory bits",
-              "Fmax MHz", "frames/s", "seconds"]
+              "LUT levels", "Fmax MHz", "frames/s", "seconds"]
     rows = [header] + [_row(t, r) for t, r in report["results"].items()]
     widths = [max(len(row[i]) for row in rows if i < len(row)) for i in range(len(header))]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
-    notes = [f"cycles per frame {report['cycles_per_frame']:,}"]
+    notes = [f"cycles per frame {report['cycles_per_frame']:,} (frames back to back)"]
     notes += [f"{t}: {r['message']}" for t, r in report["results"].items()
               if r["status"] == "ok" and r.get("message")]
+    for t, r in report["results"].items():
+        path = r.get("logic_levels_path")
+        if path:
+            notes.append(f"{t} deepest register-to-register logic: {path.get('from')} -> "
+                         f"{path.get('to')} ({r['logic_levels']:.1f} LUT levels)")
     notes += [f"{t} critical path: {r['critical_path']}" for t, r in report["results"].items()
               if r.get("critical_path")]
     return "\n".join(lines + notes)
 
 
-def _cell(result, key):
+def _cell(result, key, digits=0):
     if result is None:
         return "not run"
-    if result["status"] != "ok":
-        return result["status"]
-    return _number(result.get(key), 1 if key == "fmax_mhz" else 0)
+    if result["status"] not in ("ok", "does not fit") or result.get(key) is None:
+        return result["status"] if result["status"] != "ok" else "-"
+    return _number(result.get(key), digits)
 
 
 def _ratio(ours, paper):
@@ -50,11 +61,40 @@ def _ratio(ours, paper):
     return f"{ours / paper:.2f}"
 
 
+def _levels(result):
+    """Logic depth of the worst register-to-register path, in LUT levels."""
+    if result is None or result["status"] not in ("ok", "does not fit"):
+        return "-"
+    return _number(result.get("logic_levels"), 1)
+
+
+def _clock(result):
+    """ECP5 Fmax, or why there is none."""
+    if result is None:
+        return "not run", "-"
+    if result["status"] == "does not fit":
+        return result.get("message", "does not fit"), "-"
+    if result["status"] != "ok":
+        return result["status"], "-"
+    if not result.get("pnr"):
+        return "not placed", "-"
+    return _number(result.get("fmax_mhz"), 1), _number(result.get("frames_per_second"), 1)
+
+
+def _name(p):
+    return f"{p['transform']} {p['block']}x{p['block']}" + (
+        f" ({p['line_buffer']})" if p.get("line_buffer", "auto") != "auto" else "")
+
+
 def sweep_markdown(reports):
-    """Markdown table of the sweep: ours beside the paper, ratios ours / paper."""
-    lines = ["| transform | block | Cyclone V ALUTs | paper LEs | ratio | registers | M10K | "
-             "memory bits | paper bits | ratio | ECP5 LUT4 | ECP5 Fmax MHz | paper MHz |",
+    """Markdown tables of the sweep: ours beside the paper (ratios ours / paper), then the
+    ECP5 columns and the clock; one row per transform, block and line buffer."""
+    lines = ["| transform | block | rows above | Cyclone V ALUTs | MLABs | paper LEs | ratio "
+             "| registers | M10K | memory bits | paper bits | ratio | LUT levels |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    clock = ["| transform | block | rows above | ECP5 LUT4 | FF | DP16KD | LUT % | LUT levels "
+             "| Fmax MHz | frames/s | paper MHz |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for report in reports:
         p = report["params"]
         index = PAPER_BLOCKS.index(p["block"])
@@ -65,24 +105,30 @@ def sweep_markdown(reports):
         ok = cv is not None and cv["status"] == "ok"
         paper_logic = "-" if logic is None else f"{logic:,}" + (
             " (did not fit)" if (p["transform"], p["block"]) in PAPER_DID_NOT_FIT else "")
+        rows = p.get("line_buffer", "auto")
         lines.append("| " + " | ".join([
-            p["transform"], f"{p['block']}x{p['block']}", _cell(cv, "logic"), paper_logic,
+            p["transform"], f"{p['block']}x{p['block']}", rows, _cell(cv, "logic"),
+            _cell(cv, "lut_rams"), paper_logic,
             _ratio(cv["logic"], logic) if ok else "-", _cell(cv, "registers"),
             _cell(cv, "block_rams"), _cell(cv, "memory_bits"), f"{memory:,}",
-            _ratio(cv["memory_bits"], memory) if ok else "-", _cell(e5, "logic"),
-            _cell(e5, "fmax_mhz"), _number(PAPER_CLOCK.get(p["block"]), 0)]) + " |")
-    failures = [f"- {r['params']['transform']} {r['params']['block']}x{r['params']['block']} "
-                f"{t}: {res['status']}: {res.get('message', '')}"
-                for r in reports for t, res in r["results"].items() if res["status"] != "ok"]
-    paths = [f"- {r['params']['transform']} {r['params']['block']}x{r['params']['block']}: "
-             f"{res['critical_path']}" for r in reports for res in r["results"].values()
-             if res.get("critical_path")]
-    seconds = [f"- {r['params']['transform']} {r['params']['block']}x{r['params']['block']} "
-               f"{t}: {res['seconds']:.0f} s"
+            _ratio(cv["memory_bits"], memory) if ok else "-", _levels(cv)]) + " |")
+        fmax, fps = _clock(e5)
+        lut = e5.get("utilisation", {}) or {} if e5 else {}
+        clock.append("| " + " | ".join([
+            p["transform"], f"{p['block']}x{p['block']}", rows, _cell(e5, "logic"),
+            _cell(e5, "registers"), _cell(e5, "block_rams"),
+            _number(lut.get("LUT"), 0) if lut else "-", _levels(e5), fmax, fps,
+            _number(PAPER_CLOCK.get(p["block"]), 0)]) + " |")
+    failures = [f"- {_name(r['params'])} {t}: {res['status']}: {res.get('message', '')}"
+                for r in reports for t, res in r["results"].items()
+                if res["status"] not in ("ok", "does not fit")]
+    paths = [f"- {_name(r['params'])}: {res['critical_path']}" for r in reports
+             for res in r["results"].values() if res.get("critical_path")]
+    seconds = [f"- {_name(r['params'])} {t}: {res['seconds']:.0f} s"
                + (f" ({res['yosys_time_split']})" if res.get("yosys_time_split") else "")
                for r in reports
                for t, res in r["results"].items() if "seconds" in res]
-    text = "\n".join(lines) + "\n"
+    text = "\n".join(lines) + "\n\n" + "\n".join(clock) + "\n"
     if failures:
         text += "\nFailed or timed out:\n\n" + "\n".join(failures) + "\n"
     if paths:

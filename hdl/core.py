@@ -114,7 +114,6 @@ class NpStereoCore(wiring.Component):
         first = Signal(name="slot_first", init=1)
         m.d.sync += first.eq(round_ == rounds - 1)
         slots = SlotClock(m, first, round_, rounds, "core")
-        decide = Const(1) if rounds == 1 else round_ == rounds - 1
 
         # Input: a two-entry register queue (s_axis_tready straight from a register).
         beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
@@ -174,40 +173,60 @@ class NpStereoCore(wiring.Component):
         end_of_frame = end_of_line & last_row
         none_outstanding = Signal(init=1, name="none_outstanding")
         m.d.sync += none_outstanding.eq(outstanding == 0)  # a clock late: a flush ends late
-        take = Signal()           # the admitted position is the head pixel (else zeros)
-        start, overlap = Signal(), Signal()
-        error = Signal()
-        m.d.sync += self.framing_error.eq(error)
         can_start = head_valid & head.user & ~inp.switch_pending & has_credit
         idle, framing, filling = (state == n for n in (IDLE, FRAME, FILL))
 
-        with m.If(idle | (state == FLUSH)):
-            # Outside a frame every beat without a start of frame is dropped.
+        # The proposal for the next slot, from registers only. With R >= 2 it is made in
+        # round R-2 and registered, and applied in round R-1: nothing it depends on can
+        # change in between except towards a later, more cautious decision (a beat
+        # arriving, credits coming back, a switch completing, a frame finishing), since
+        # only an applied decision pops the queue or takes a credit. So the decision, the
+        # pop and the queue's next head no longer form a loop of one clock (9.9 ns, 6
+        # levels on ECP5). With R = 1 the proposal is applied in the clock it is made.
+        proposal = data.StructLayout({name: 1 for name in (
+            "admit", "take", "start", "overlap", "pop", "error", "to_fill", "to_idle")})
+        proposed = Signal(proposal)
+        with m.If(idle):
             with m.If(head_valid & ~head.user):
-                m.d.comb += [pop.eq(1), error.eq(1)]
-        with m.If(decide):
-            with m.If(idle):
-                with m.If(can_start):
-                    m.d.comb += [admit.eq(1), take.eq(1), start.eq(1), pop.eq(1)]
-            with m.Elif(framing):
-                with m.If(head_valid & head.user):
-                    m.d.comb += error.eq(1)
-                    m.d.sync += state.eq(FILL)
-                with m.Elif(head_valid & has_credit):
-                    m.d.comb += [admit.eq(1), take.eq(1), pop.eq(1)]
-                    with m.If(head.last != end_of_line):
-                        m.d.comb += error.eq(1)
-            with m.Elif(filling):
-                with m.If(has_credit):
-                    m.d.comb += admit.eq(1)
-            with m.Else():  # FLUSH
-                with m.If(none_outstanding):
-                    m.d.sync += state.eq(IDLE)
-                with m.Elif(line_start & can_start):
-                    m.d.comb += [admit.eq(1), take.eq(1), start.eq(1), overlap.eq(1),
-                                 pop.eq(1)]
-                with m.Elif(has_credit):
-                    m.d.comb += admit.eq(1)
+                # Outside a frame every beat without a start of frame is dropped.
+                m.d.comb += [proposed.pop.eq(1), proposed.error.eq(1)]
+            with m.Elif(can_start):
+                m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
+                             proposed.pop.eq(1)]
+        with m.Elif(framing):
+            with m.If(head_valid & head.user):
+                m.d.comb += [proposed.error.eq(1), proposed.to_fill.eq(1)]
+            with m.Elif(head_valid & has_credit):
+                m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.pop.eq(1),
+                             proposed.error.eq(head.last != end_of_line)]
+        with m.Elif(filling):
+            m.d.comb += proposed.admit.eq(has_credit)
+        with m.Else():  # FLUSH
+            with m.If(head_valid & ~head.user):
+                m.d.comb += [proposed.pop.eq(1), proposed.error.eq(1)]
+            with m.If(none_outstanding):
+                m.d.comb += proposed.to_idle.eq(1)
+            with m.Elif(line_start & can_start):
+                m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
+                             proposed.overlap.eq(1), proposed.pop.eq(1)]
+            with m.Else():
+                m.d.comb += proposed.admit.eq(has_credit)
+        chosen = Signal(proposal)
+        if rounds == 1:
+            m.d.comb += chosen.eq(proposed)
+        else:
+            latched = Signal(proposal, name="proposal")
+            m.d.sync += latched.eq(Mux(slots.first(rounds - 2), proposed, 0))
+            m.d.comb += chosen.eq(Mux(slots.first(rounds - 1), latched, 0))
+        take = chosen.take        # the admitted position is the head pixel (else zeros)
+        start, overlap = chosen.start, chosen.overlap
+        error = Signal()
+        m.d.sync += self.framing_error.eq(error)
+        m.d.comb += [admit.eq(chosen.admit), pop.eq(chosen.pop), error.eq(chosen.error)]
+        with m.If(chosen.to_fill):
+            m.d.sync += state.eq(FILL)
+        with m.If(chosen.to_idle):
+            m.d.sync += state.eq(IDLE)
 
         with m.If(admit):
             with m.If(start):

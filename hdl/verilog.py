@@ -32,11 +32,12 @@ def header(params):
         f"  with Amaranth {_version('amaranth')}",
         f"  transform={params.transform} block={params.block} disparities={params.disparities}"
         f" rounds={params.rounds} aggregation={params.aggregation} lr_threshold={lr}",
-        f"  width={params.width} height={params.height}",
+        f"  width={params.width} height={params.height} rows above kept as "
+        f"{params.stored_rows} (line_buffer={params.line_buffer})",
         f"  s_axis_tdata[15:0] = {{right, left}}; m_axis_tdata[{output_width(params) - 1}:0]"
         f" = {{valid, 0..., disparity[{params.disparity_bits - 1}:0]}}",
         f"  one output word per input pixel; {params.rounds} clock(s) per pixel; "
-        f"latency {latency(params)} pixels",
+        f"flush after the last frame {latency(params)} pixels",
     ]
     return "".join(f"// {line}\n" for line in lines)
 

@@ -204,5 +204,6 @@ class StereoParams:
         """One line for headers, logs and file names' documentation."""
         lr = "off" if self.lr_threshold is None else str(self.lr_threshold)
         size = "" if self.width is None else f" {self.width}x{self.height}"
+        buffer = "" if self.line_buffer == "auto" else f" LB={self.line_buffer}"
         return (f"{self.transform} {self.block}x{self.block} D={self.disparities} "
-                f"R={self.rounds} A={self.aggregation} LR={lr}{size}")
+                f"R={self.rounds} A={self.aggregation} LR={lr}{size}{buffer}")

@@ -166,18 +166,20 @@ def test_failed_cell_keeps_the_sweep_going(monkeypatch):
         raise RuntimeError("elaboration blew up")
     monkeypatch.setattr(cmd_report, "evaluate", explode)
     params = paper_configurations()[0]
-    report = cmd_report._job(params, ("cyclonev",), False, 150.0, None, None)
+    report = cmd_report._job(params, ("cyclonev",), False, 150.0, None, None, None)
     assert report["results"]["cyclonev"]["status"] == "failed"
     assert "blew up" in report["results"]["cyclonev"]["message"]
     text = sweep_markdown([report])
-    assert "| rank | 7x7 | failed |" in text and "10,174" in text
+    assert "| rank | 7x7 | transforms | failed |" in text and "10,174" in text
 
 
 def test_paper_sweep_configurations():
     configurations = paper_configurations()
-    assert len(configurations) == 28
+    # 4 transforms x 7 blocks, each with the rows above kept as transforms and as costs.
+    assert len(configurations) == 56
     assert {(p.width, p.height, p.disparities, p.rounds) for p in configurations} == {
         (450, 375, 100, 10)}
+    assert {p.stored_rows for p in configurations} == {"transforms", "costs"}
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -221,13 +223,28 @@ def test_cli_single_configuration(tmp_path, capsys):
 
 def test_sweep_outputs_ratios_and_plots(tmp_path):
     ok = {"target": "cyclonev", "status": "ok", "logic": 5087, "registers": 100,
-          "block_rams": 3, "memory_bits": 557056 * 2, "fmax_mhz": None, "seconds": 1.0}
-    report = {"params": {"transform": "rank", "block": 7}, "results": {"cyclonev": ok}}
-    text = sweep_markdown([report])
+          "block_rams": 3, "lut_rams": 40, "memory_bits": 557056 * 2, "fmax_mhz": None,
+          "logic_levels": 6.2, "seconds": 1.0}
+    placed = {"target": "ecp5", "status": "ok", "logic": 6000, "registers": 4000,
+              "block_rams": 6, "utilisation": {"LUT": 9.1}, "logic_levels": 5.0,
+              "pnr": True, "fmax_mhz": 160.0, "frames_per_second": 94.8, "seconds": 300.0,
+              "critical_path": "a -> b: 6.1 ns, 4 logic levels"}
+    too_big = {"target": "ecp5", "status": "does not fit", "message": "does not fit (112 % LUT)",
+               "logic": 93000, "registers": 4000, "block_rams": 6,
+               "utilisation": {"LUT": 112.0}, "logic_levels": 5.0, "pnr": True,
+               "fmax_mhz": None, "seconds": 60.0}
+    reports = [{"params": {"transform": "rank", "block": 7, "line_buffer": "transforms"},
+                "results": {"cyclonev": ok, "ecp5": placed}},
+               {"params": {"transform": "rank", "block": 9, "line_buffer": "costs"},
+                "results": {"cyclonev": ok, "ecp5": too_big}}]
+    text = sweep_markdown(reports)
     # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
-    assert "| rank | 7x7 | 5,087 | 10,174 | 0.50 |" in text and "| 2.00 |" in text
-    written = sweep_plots([report], tmp_path)
-    assert [p.name for p in written] == ["logic.png", "memory.png"]
+    assert "| rank | 7x7 | transforms | 5,087 | 40 | 10,174 | 0.50 |" in text
+    assert "| 2.00 | 6.2 |" in text
+    assert "| rank | 7x7 | transforms | 6,000 | 4,000 | 6 | 9 | 5.0 | 160.0 | 94.8 | 100 |" in text
+    assert "| does not fit (112 % LUT) |" in text
+    written = sweep_plots(reports, tmp_path)
+    assert [p.name for p in written] == ["logic.png", "memory.png", "fmax.png"]
     assert all(Image.open(p).size[0] > 100 for p in written)
 
 
