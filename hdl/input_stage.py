@@ -126,18 +126,24 @@ class InputStage(wiring.Component):
                 m.d.sync += [columns[c].eq(columns[c + 1]) for c in range(block - 1)]
                 m.d.sync += columns[block - 1].eq(Cat(*reversed(older), newest_pixel))
             window = self.window_left if name == "left" else self.window_right
-            # One assignment of the whole window: per-element assignments would each cost a
-            # full-width assignment cell in the netlist.
-            m.d.comb += window.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
+            # The masked window is a register of its own: a mask in front of the
+            # transform's comparisons was the longest path (11 ns for census 9x9 on ECP5,
+            # the masks reaching 16 pixels each). One assignment of the whole window:
+            # per-element assignments would each cost a full-width assignment cell.
+            masked = Signal.like(window, name=f"{name}_window", reset_less=True)
+            m.d.sync += masked.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
                                       for row in range(block) for c in range(block)))
+            m.d.comb += window.eq(masked)
 
-        m.d.comb += self.tag.eq(tag)
+        # The tag leaves with the masked window, a clock after the shift.
+        m.d.comb += self.tag.eq(slots.delay(tag, LATENCY - 1, 1, "window_tag"))
         return m
 
     def _centre(self, m, slots):
         """The centre's tag and the window masks, updated with the window.
 
-        The tag is slot-aligned at offset LATENCY: x, y and live change with each
+        The tag is slot-aligned at offset LATENCY - 1 (the stage delays it once more with
+        the masked window): x, y and live change with each
         admitted position, ``valid`` says in every slot whether it carries one.
 
         Two frames' coordinates coexist while frames overlap. The window masks follow the
@@ -215,10 +221,10 @@ class InputStage(wiring.Component):
                              switch_window.eq(countdown == window_event + 1),
                              switch_tag.eq(countdown == 2)]
 
-        # The tag leaves with the window (slot-aligned at LATENCY).
+        # The tag changes with the window's shift (slot-aligned at LATENCY - 1).
         tag = Signal(layout)
         admitted = pipe(m, stepping, 1, "admitted_tag", reset=True)
-        with m.If(slots.first(LATENCY - 1)):
+        with m.If(slots.first(LATENCY - 2)):
             m.d.sync += tag.valid.eq(admitted)
         with m.If(admitted):
             m.d.sync += [tag.x.eq(x), tag.y.eq(y), tag.live.eq(live)]

@@ -113,8 +113,8 @@ def min_tree_plan(params, every=DEFAULT_EVERY):
 # Offsets of the stages ---------------------------------------------------------------------
 
 #: Clocks from the admission of a pixel to the window: the line buffers' block RAM read,
-#: its output register, the window's shift.
-INPUT_LATENCY = 3
+#: its output register, the window's shift, the masked window's register.
+INPUT_LATENCY = 4
 
 
 def cost_rows(params):
