@@ -79,7 +79,11 @@ class Rank(_WindowTransform):
     """Eq. 2: number of neighbours darker than the centre (compares, then a popcount)."""
 
     def _value(self, m, centre, neighbours):
-        return build_popcount(m, self.en, [xi(centre, p) for p in neighbours], self.plan)
+        compared = Cat(xi(centre, p) for p in neighbours)
+        if self.plan[0]:
+            compared = delay(m, self.en, compared, 1, "rank_compared")
+        return build_popcount(m, self.en, [compared[n] for n in range(len(neighbours))],
+                              self.plan[1:])
 
 
 class Census(_WindowTransform):
