@@ -19,7 +19,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, Store, bits_for, column_inside, pipe, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, tag_layout
 from .plan import VERTICAL_CLOCKS, aggregation_latency, vertical_bits
 from .trees import DEFAULT_EVERY, build_sum, register_plan
 
@@ -29,6 +29,15 @@ __all__ = ["Aggregation"]
 def _row_inside(y, above, height):
     """The row ``above`` rows above the newest row ``y`` lies in the frame."""
     return (y >= above) & (y < height + above)
+
+
+def _tap_inside(newest_x, k, a):
+    """Tap k (column ``newest_x - k``) lies in the row of the centre, a columns behind
+    the newest: in the same row it is column newest_x - k >= 0; when the centre is still
+    in the row above (newest_x < a) it is that row's column W + newest_x - k < W. Formed
+    from the newest column directly, not from the centre's (a subtraction and a
+    multiplexer more in front of the comparisons)."""
+    return Mux(newest_x < a, newest_x < k, newest_x >= k)
 
 
 class Aggregation(wiring.Component):
@@ -149,7 +158,7 @@ class Aggregation(wiring.Component):
                      centre.y.eq(Mux(wraps, tag.y - a - 1, tag.y - a))]
         # Tap k holds column x_newest - k, i.e. the centre's column + (a - k).
         keep = [Signal(name=f"column_ok{k}") for k in range(2 * a + 1)]
-        m.d.sync += [ok.eq(column_inside(centre.x, a - k, width)) for k, ok in enumerate(keep)]
+        m.d.sync += [ok.eq(_tap_inside(newest_x, k, a)) for k, ok in enumerate(keep)]
         sums = []
         for i, value in enumerate(values):
             taps = Store(m, f"row_taps{i}", unsigned(2 * a * bits), rounds)

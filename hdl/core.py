@@ -115,24 +115,35 @@ class NpStereoCore(wiring.Component):
         m.d.sync += first.eq(round_ == rounds - 1)
         slots = SlotClock(m, first, round_, rounds, "core")
 
-        # Input: a two-entry register queue (s_axis_tready straight from a register).
+        # Input: two two-entry register queues in a row (s_axis_tready straight from a
+        # register). The first one takes the ports, the second one feeds the admission:
+        # registers that take the ports are placed near the pins, and the admission's pop
+        # reaching them there was the longest path of census 9x9 on ECP5 (12.5 ns, two LUT
+        # levels, the rest routing).
         beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
         incoming = Signal(beat)
         m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
                      incoming.last.eq(self.s_axis_tlast)]
-        pop = Signal()
-        head, head_valid = _queue(m, incoming, self.s_axis_tvalid, pop, self.s_axis_tready)
+        pop, port_pop, admission_ready = Signal(), Signal(), Signal()
+        port_head, port_valid = _queue(m, "in_port", incoming, self.s_axis_tvalid, port_pop,
+                                       self.s_axis_tready)
+        m.d.comb += port_pop.eq(port_valid & admission_ready)
+        head, head_valid = _queue(m, "in_queue", port_head, port_valid, pop, admission_ready)
 
         # Output: the queue of words, and the credits of positions it can still take.
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
         m.submodules.out_queue = queue = SyncFIFOBuffered(
             width=word_layout.size, depth=self.queue_depth)
         word = Signal(word_layout)
-        out_head = Signal(word_layout)
+        # The ports are driven by a two-entry register queue of their own, for the same
+        # reason as at the input: m_axis_tready reaches its registers only.
+        queued, out_pop, port_ready = Signal(word_layout), Signal(), Signal()
+        m.d.comb += [queued.eq(queue.r_data), queue.r_en.eq(port_ready)]
+        out_head, out_valid = _queue(m, "out_port", queued, queue.r_rdy, out_pop, port_ready)
         m.d.comb += [
             queue.w_en.eq(lr.produce), queue.w_data.eq(word),
-            out_head.eq(queue.r_data), queue.r_en.eq(self.m_axis_tready),
-            self.m_axis_tvalid.eq(queue.r_rdy), self.m_axis_tdata.eq(out_head.data),
+            out_pop.eq(out_valid & self.m_axis_tready),
+            self.m_axis_tvalid.eq(out_valid), self.m_axis_tdata.eq(out_head.data),
             self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last),
             word.data.eq(Cat(Mux(lr.valid, lr.disparity_out, 0),
                              Const(0, output_width(p) - 1 - len(lr.disparity_out)), lr.valid)),
@@ -145,13 +156,14 @@ class NpStereoCore(wiring.Component):
         # Credits come back when a word leaves the queue or a position retires without
         # one. Both sums (with and without this clock's admission) are formed beside the
         # admission logic, which then only chooses between them: the decision is the
-        # longest logic of the core, and an adder behind it cost 11 ns on ECP5.
-        returned = credits + (queue.r_rdy & self.m_axis_tready) + (lr.retire & ~lr.produce)
+        # longest logic of the core, and an adder behind it cost 11 ns on ECP5. The flag
+        # the decision reads is registered from the counter itself, a clock late (see
+        # _has_room), so no comparison follows the sums.
+        returned = credits + (queue.r_rdy & port_ready) + (lr.retire & ~lr.produce)
         kept = Signal(range(self.queue_depth + 3), name="credits_kept")
         taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
         m.d.comb += [kept.eq(returned), taken.eq(returned - 1)]
-        m.d.sync += [credits.eq(Mux(admit, taken, kept)),
-                     has_credit.eq(Mux(admit, _has_room(taken), _has_room(kept)))]
+        m.d.sync += [credits.eq(Mux(admit, taken, kept)), has_credit.eq(_has_room(credits))]
 
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
@@ -183,32 +195,50 @@ class NpStereoCore(wiring.Component):
         # only an applied decision pops the queue or takes a credit. So the decision, the
         # pop and the queue's next head no longer form a loop of one clock (9.9 ns, 6
         # levels on ECP5). With R = 1 the proposal is applied in the clock it is made.
-        proposal = data.StructLayout({name: 1 for name in (
-            "admit", "take", "start", "overlap", "pop", "error", "to_fill", "to_idle")})
+        # The proposal also carries the framing state that follows it (``change``,
+        # ``state``), so applying it is one multiplexer in front of the state register.
+        proposal = data.StructLayout({
+            **{name: 1 for name in ("admit", "take", "start", "overlap", "pop", "error",
+                                    "change")},
+            "state": range(4)})
         proposed = Signal(proposal)
+
+        def to(new_state):
+            return [proposed.change.eq(1), proposed.state.eq(new_state)]
+
+        def start_frame(overlapping):
+            # A line of one pixel cannot end on the first pixel: width > 2 always.
+            return [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
+                    proposed.overlap.eq(overlapping), proposed.pop.eq(1),
+                    proposed.error.eq(head.last), *to(Mux(head.last, FILL, FRAME))]
+
         with m.If(idle):
             with m.If(head_valid & ~head.user):
                 # Outside a frame every beat without a start of frame is dropped.
                 m.d.comb += [proposed.pop.eq(1), proposed.error.eq(1)]
             with m.Elif(can_start):
-                m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
-                             proposed.pop.eq(1)]
+                m.d.comb += start_frame(0)
         with m.Elif(framing):
             with m.If(head_valid & head.user):
-                m.d.comb += [proposed.error.eq(1), proposed.to_fill.eq(1)]
+                m.d.comb += [proposed.error.eq(1), *to(FILL)]
             with m.Elif(head_valid & has_credit):
                 m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.pop.eq(1),
                              proposed.error.eq(head.last != end_of_line)]
+                with m.If(end_of_frame):
+                    m.d.comb += to(FLUSH)
+                with m.Elif(head.last != end_of_line):
+                    m.d.comb += to(FILL)
         with m.Elif(filling):
             m.d.comb += proposed.admit.eq(has_credit)
+            with m.If(has_credit & end_of_frame):
+                m.d.comb += to(FLUSH)
         with m.Else():  # FLUSH
             with m.If(head_valid & ~head.user):
                 m.d.comb += [proposed.pop.eq(1), proposed.error.eq(1)]
             with m.If(none_outstanding):
-                m.d.comb += proposed.to_idle.eq(1)
+                m.d.comb += to(IDLE)
             with m.Elif(line_start & can_start):
-                m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
-                             proposed.overlap.eq(1), proposed.pop.eq(1)]
+                m.d.comb += start_frame(1)
             with m.Else():
                 m.d.comb += proposed.admit.eq(has_credit)
         chosen = Signal(proposal)
@@ -223,21 +253,13 @@ class NpStereoCore(wiring.Component):
         error = Signal()
         m.d.sync += self.framing_error.eq(error)
         m.d.comb += [admit.eq(chosen.admit), pop.eq(chosen.pop), error.eq(chosen.error)]
-        with m.If(chosen.to_fill):
-            m.d.sync += state.eq(FILL)
-        with m.If(chosen.to_idle):
-            m.d.sync += state.eq(IDLE)
+        with m.If(chosen.change):
+            m.d.sync += state.eq(chosen.state)
 
         with m.If(admit):
             with m.If(start):
                 m.d.sync += [column.eq(1), row.eq(0), line_start.eq(0),
                              end_of_line.eq(width == 2), last_row.eq(height == 1)]
-                # A line of one pixel cannot end on the first pixel: width > 2 always.
-                with m.If(head.last):
-                    m.d.comb += error.eq(1)
-                    m.d.sync += state.eq(FILL)
-                with m.Else():
-                    m.d.sync += state.eq(FRAME)
             with m.Else():
                 m.d.sync += [column.eq(Mux(end_of_line, 0, column + 1)),
                              line_start.eq(end_of_line),
@@ -245,11 +267,6 @@ class NpStereoCore(wiring.Component):
                 with m.If(end_of_line):
                     m.d.sync += [row.eq(Mux(end_of_frame, 0, row + 1)),
                                  last_row.eq(~end_of_frame & (row == height - 2))]
-                with m.If(~(state == FLUSH)):
-                    with m.If(end_of_frame):
-                        m.d.sync += state.eq(FLUSH)
-                    with m.Elif(take & (head.last != end_of_line)):
-                        m.d.sync += state.eq(FILL)
 
         m.d.sync += outstanding.eq(outstanding + (admit & start) - frame_done)
 
@@ -280,18 +297,19 @@ class NpStereoCore(wiring.Component):
 
 
 def _has_room(credits):
-    """Whether the output queue is sure to take the word of one more position."""
-    return credits != 0
+    """Whether the output queue is sure to take the word of one more position in the next
+    clock: at most one credit is taken per clock, so two now leave at least one then."""
+    return credits >= 2
 
 
-def _queue(m, incoming, push_valid, pop, ready):
+def _queue(m, name, incoming, push_valid, pop, ready):
     """A two-entry queue of registers; returns ``(head, valid)``.
 
     A word is taken when ``push_valid`` and the queue is not full; ``ready`` is driven with
     "not full", from the level register alone.
     """
-    entries = [Signal.like(incoming, name=f"in_queue{i}") for i in range(2)]
-    level = Signal(range(3), name="in_queue_level")
+    entries = [Signal.like(incoming, name=f"{name}{i}") for i in range(2)]
+    level = Signal(range(3), name=f"{name}_level")
     push = push_valid & (level != 2)
     m.d.comb += ready.eq(level != 2)
     kept = level - pop  # words left after this clock's pop, before the push

@@ -34,6 +34,16 @@ def _row_inside(y, offset, height):
     return (y >= -offset) & (y < height - offset)
 
 
+def _row_inside_at(y, offset, height):
+    """:func:`_row_inside` of a constant row."""
+    return int(0 <= y + offset < height)
+
+
+def _column_inside_at(x, offset, width):
+    """:func:`~.common.column_inside` of a constant column."""
+    return int(0 <= x + offset < width)
+
+
 class InputStage(wiring.Component):
     """Windows of both images around one centre per admitted slot.
 
@@ -191,6 +201,29 @@ class InputStage(wiring.Component):
         m.d.sync += [y_room.eq(y < highest), window_room.eq(window_y < highest)]
         window_event = tag_lag - lag + 1
 
+        # Which window rows and columns lie inside the frame: flags stepped with the
+        # counters rather than comparisons of them in front of the masks (six LUT levels
+        # on ECP5). A step to the next column shifts the column flags (column x + 1 + o is
+        # column x + (o + 1)); the row flags shift when the window row advances. The one
+        # flag past each end that a shift brings in is a comparison of its own: for the
+        # columns one in the step (x changes every step), for the rows one registered every
+        # clock from window_y (rows change only at line ends, W > 2 steps apart; a jump
+        # sets it itself).
+        offsets = range(-r, r + 1)
+        row_ok = [Signal(name=f"row_ok{o + r}") for o in offsets]
+        row_next = Signal(name="row_ok_next")          # row window_y + r + 1
+        col_ok = [Signal(name=f"col_ok{o + r}") for o in offsets]
+        col_next = Signal(name="col_ok_next")           # column x + r + 1
+        m.d.sync += row_next.eq(_row_inside(window_y, r + 1, height))
+
+        def rows_at(value):
+            return [row_ok[o + r].eq(_row_inside_at(value, o, height)) for o in offsets] + \
+                   [row_next.eq(_row_inside_at(value, r + 1, height))]
+
+        def columns_at(value):
+            return [col_ok[o + r].eq(_column_inside_at(value, o, width)) for o in offsets] + \
+                   [col_next.eq(_column_inside_at(value, r + 1, width))]
+
         with m.If(stepping):
             with m.If(start & ~overlap):
                 # The previous frame is finished: jump to the new frame's coordinates.
@@ -198,18 +231,28 @@ class InputStage(wiring.Component):
                 m.d.sync += [x.eq(first_x), y.eq(first_y), window_y.eq(first_y),
                              live.eq(1), line_end.eq(first_x == width - 1),
                              y_room.eq(first_y < highest), window_room.eq(first_y < highest)]
+                m.d.sync += rows_at(first_y) + columns_at(first_x)
             with m.Else():
                 m.d.sync += [x.eq(Mux(line_end, 0, x + 1)),
                              line_end.eq(~line_end & (x == width - 2))]
+                with m.If(line_end):
+                    m.d.sync += columns_at(0)
+                with m.Else():
+                    m.d.sync += [col_ok[i].eq(col_ok[i + 1]) for i in range(2 * r)]
+                    m.d.sync += [col_ok[2 * r].eq(col_next),
+                                 col_next.eq(column_inside(x, r + 2, width))]
                 with m.If(line_end & y_room):
                     m.d.sync += y.eq(y + 1)
                 with m.If(line_end & window_room):
                     m.d.sync += window_y.eq(window_y + 1)
+                    m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(2 * r)]
+                    m.d.sync += row_ok[2 * r].eq(row_next)
                 # The window centre reaches the new frame's pixel (0, 0), then the
                 # aggregation centre does (the window centre is at (a, a) then); x agrees
                 # in both frames.
                 with m.If(switch_window):
                     m.d.sync += [window_y.eq(0), window_room.eq(0 < highest)]
+                    m.d.sync += rows_at(0)
                 with m.If(switch_tag):
                     m.d.sync += [y.eq(a), live.eq(1), y_room.eq(a < highest)]
             with m.If(start & overlap):
@@ -230,10 +273,8 @@ class InputStage(wiring.Component):
             m.d.sync += [tag.x.eq(x), tag.y.eq(y), tag.live.eq(live)]
 
         # Which window pixels lie inside the frame, one register per pixel, from the
-        # stepped counters: one flag per window row would fan out to a whole row of both
+        # stepped flags: one flag per window row would fan out to a whole row of both
         # windows (5.6 ns of routing on ECP5).
-        row_ok = [_row_inside(window_y, offset, height) for offset in range(-r, r + 1)]
-        col_ok = [column_inside(x, offset, width) for offset in range(-r, r + 1)]
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
                 for row in range(block)]
         with m.If(admitted):

@@ -25,7 +25,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, Store, absolute_difference, better, bits_for, pipe, round_base, \
+from .common import SlotClock, Store, better, bits_for, pipe, round_base, \
     tag_layout
 from .plan import LR_STAGE_A, lr_timing
 
@@ -38,9 +38,10 @@ def _primed(seen, depth):
     return seen == depth
 
 
-def _consistent(difference, threshold):
-    """The consistency test on |dL - dR|."""
-    return difference <= threshold
+def _consistent(partner, low, high):
+    """The consistency test |dL - dR| <= T, as dR in [dL - T, dL + T] (the bounds are
+    registers formed while dR is read: two comparisons behind the read, no subtraction)."""
+    return (partner >= low) & (partner <= high)
 
 
 class LRCheck(wiring.Component):
@@ -212,34 +213,49 @@ class LRCheck(wiring.Component):
         m.submodules.right_history = history = Memory(shape=unsigned(d_bits), depth=size,
                                                       init=[], attrs={"no_rw_check": 1})
         history_read, history_write = history.read_port(domain="sync"), history.write_port()
-        exit_count = Signal(index_shape, name="exit_count")
+        # Position n leaves: dR of n - D + 1 is written, the left winner of n - D is read.
+        # Both addresses are counters of their own (the stores' depth is a power of two,
+        # so they wrap with the index): no subtraction in front of the RAMs.
+        written = Signal(index_shape, name="history_written", init=(1 - depth) % size)
+        checked_address = Signal(index_shape, name="checked_address", init=(-depth) % size)
         primed = Signal(name="primed")          # D positions have left since reset
         seen = Signal(range(depth + 1), name="exits_seen")
         with m.If(leaving):
-            m.d.sync += exit_count.eq(exit_count + 1)
+            m.d.sync += [written.eq(written + 1), checked_address.eq(checked_address + 1)]
             with m.If(seen != depth):
                 m.d.sync += seen.eq(seen + 1)
         m.d.comb += primed.eq(_primed(seen, depth))
-        m.d.comb += [history_write.addr.eq(exit_count - depth + 1),
+        m.d.comb += [history_write.addr.eq(written),
                      history_write.en.eq(leaving), history_write.data.eq(final),
-                     left_read.addr.eq(exit_count - depth)]
+                     left_read.addr.eq(checked_address)]
         # Clock 1: the RAM; 2: its output register; 3: the partner's address; 4: the RAM;
         # 5: its output register; 6: the check's result.
         entry = pipe(m, left_read.data, 1, "checked_left")
-        checked_index = pipe(m, exit_count - depth, 2, "checked_index")
+        checked_index = pipe(m, checked_address, 2, "checked_index")
         partner_address = Signal(index_shape, name="partner_address", reset_less=True)
         m.d.sync += partner_address.eq(checked_index - entry.d)
         m.d.comb += history_read.addr.eq(partner_address)
         partner = pipe(m, history_read.data, 1, "partner")
         checked = pipe(m, entry, 3, "checked_left_late")
         stage = pipe(m, Cat(leaving, primed), 5, "check_pulse", reset=True)
-        kept = checked.tag.x >= checked.d
+        # What does not depend on dR is decided while dR is read.
+        placed = Signal(name="checked_placed")
+        in_frame = Signal(name="checked_in_frame")
+        m.d.sync += [placed.eq((entry.tag.x >= entry.d) &
+                               (entry.tag.x >= p.first_valid_column)),
+                     in_frame.eq(self._in_frame(entry.tag))]
+        kept = pipe(m, placed, 2, "checked_placed")
+        in_frame = pipe(m, in_frame, 2, "checked_in_frame")
         if p.lr_threshold is not None:
-            kept = kept & _consistent(absolute_difference(checked.d, partner), p.lr_threshold)
+            low = Signal(range(-p.lr_threshold, depth), name="consistent_low")
+            high = Signal(range(depth + p.lr_threshold), name="consistent_high")
+            m.d.sync += [low.eq(entry.d - p.lr_threshold), high.eq(entry.d + p.lr_threshold)]
+            low, high = pipe(m, low, 2, "consistent_low"), pipe(m, high, 2, "consistent_high")
+            kept = kept & _consistent(partner, low, high)
         m.d.sync += [
             self.retire.eq(stage[0]),
-            self.produce.eq(stage[0] & stage[1] & self._in_frame(checked.tag)),
-            self.valid.eq(kept & (checked.tag.x >= p.first_valid_column)),
+            self.produce.eq(stage[0] & stage[1] & in_frame),
+            self.valid.eq(kept),
             self.disparity_out.eq(checked.d),
             self.x.eq(checked.tag.x), self.y.eq(checked.tag.y),
         ]

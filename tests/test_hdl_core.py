@@ -237,7 +237,7 @@ def test_broken_lr_tie_rule_is_caught(monkeypatch):
 def test_broken_lr_threshold_is_caught(monkeypatch):
     """|dL - dR| < T instead of <= T in the consistency test."""
     monkeypatch.setattr(lr_check, "_consistent",
-                        lambda difference, threshold: difference < threshold)
+                        lambda partner, low, high: (partner > low) & (partner < high))
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=2, width=20, height=8), NOISE)
 
@@ -246,6 +246,7 @@ def test_broken_window_row_mask_is_caught(monkeypatch):
     """Window rows outside the frame left unmasked: the rows an aborted frame left in the
     line buffers leak into the top rows."""
     monkeypatch.setattr(input_stage, "_row_inside", lambda y, offset, height: 1)
+    monkeypatch.setattr(input_stage, "_row_inside_at", lambda y, offset, height: 1)
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 
@@ -253,6 +254,7 @@ def test_broken_window_row_mask_is_caught(monkeypatch):
 def test_broken_window_column_mask_is_caught(monkeypatch):
     """Window columns outside the frame left unmasked: the previous row's end leaks in."""
     monkeypatch.setattr(input_stage, "column_inside", lambda x, offset, width: 1)
+    monkeypatch.setattr(input_stage, "_column_inside_at", lambda x, offset, width: 1)
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 

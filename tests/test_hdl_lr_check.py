@@ -92,5 +92,5 @@ def test_broken_right_tie_rule_is_caught(monkeypatch):
 def test_broken_consistency_test_is_caught(monkeypatch):
     """``<`` instead of ``<=`` in |dL - dR| <= T."""
     monkeypatch.setattr(hdl_lr_check, "_consistent",
-                        lambda difference, threshold: difference < threshold)
+                        lambda partner, low, high: (partner > low) & (partner < high))
     assert check(8, 2, 0, gaps=0.3) > 0
