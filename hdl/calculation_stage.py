@@ -109,8 +109,9 @@ class CalculationStage(wiring.Component):
         right_words = self._right_stores(m, slots, Cat(*right), tag)
         # The left word reaches the cost units with the stores' read registers.
         left_word = pipe(m, Cat(*left), 2, "left_word")
-        tag = slots.delay(tag, self.transformed, self.stored + 1 - self.transformed, "cost_tag")
-        costs = self._costs(m, slots, left_word, right_words, tag)
+        early = slots.delay(tag, self.transformed, self.stored - self.transformed, "stored_tag")
+        tag = slots.delay(early, self.stored, 1, "cost_tag")
+        costs = self._costs(m, slots, left_word, right_words, tag, early)
 
         m.submodules.aggregation = aggregation = self.aggregation
         newest = slots.delay(tag, self.stored + 1, self.vertical - self.stored - 1,
@@ -236,19 +237,27 @@ class CalculationStage(wiring.Component):
                 store.write(address0, Mux(last_round, newest, words[-1]), write0_enable)
         return operands
 
-    def _costs(self, m, slots, left_word, right_words, tag):
+    def _costs(self, m, slots, left_word, right_words, tag, early):
         """Masked costs (or vertical sums of A rows) per unit, at offset ``self.vertical``.
 
-        ``tag`` is slot-aligned at ``self.stored + 1``, where the operands are. A cost is 0
-        where x - d < 0, where its row lies outside the frame, and in slots without a
-        position.
+        ``tag`` is slot-aligned at ``self.stored + 1``, where the operands are, ``early``
+        a clock before. A cost is 0 where x - d < 0, where its row lies outside the frame,
+        and in slots without a position.
         """
         p = self.params
         start = self.stored + 1
         bits = p.transform_bits
-        # x - j*D/R once, then one constant comparison per unit: x - d >= 0 <=> x - j*D/R >= i.
+        units = p.per_round
+        # x - j*D/R once, then per unit x - d >= 0 <=> x - j*D/R >= i, for i < D/R: beyond
+        # D/R every unit's pair exists, below it only the low bits decide (ten comparisons of
+        # one signed word with constants were five LUT levels for census 9x9 on ECP5).
         x_minus_round = Signal(range(-p.disparities, p.width), name="x_minus_round")
-        m.d.sync += x_minus_round.eq(tag.x - round_base(m, slots, start, p.per_round))
+        m.d.sync += x_minus_round.eq(early.x - round_base(m, slots, start - 1, units))
+        all_pairs, some_pairs = Signal(name="all_pairs"), Signal(name="some_pairs")
+        low = Signal(range(units), name="x_minus_round_low")
+        m.d.sync += [all_pairs.eq(x_minus_round >= units),
+                     some_pairs.eq(x_minus_round >= 0),
+                     low.eq(x_minus_round[:len(low)])]
         rows_ok = []
         for k in range(self.rows):
             ok = Signal(name=f"cost_row_ok{k}")
@@ -263,7 +272,7 @@ class CalculationStage(wiring.Component):
         masked = []
         for i, units in enumerate(self.cost_units):
             in_row = Signal(name=f"in_row{i}")
-            m.d.sync += in_row.eq(x_minus_round >= i)
+            m.d.sync += in_row.eq(all_pairs | (some_pairs & (low >= i)))
             in_row = pipe(m, in_row, self.costed - start - 2, f"in_row{i}")
             row_costs = []
             for k, unit in enumerate(units):

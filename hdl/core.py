@@ -147,8 +147,7 @@ class NpStereoCore(wiring.Component):
             self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last),
             word.data.eq(Cat(Mux(lr.valid, lr.disparity_out, 0),
                              Const(0, output_width(p) - 1 - len(lr.disparity_out)), lr.valid)),
-            word.user.eq((lr.x == 0) & (lr.y == 0)),
-            word.last.eq(lr.x == width - 1),
+            word.user.eq(lr.frame_start), word.last.eq(lr.line_end),
         ]
         admit = Signal()        # the decision of this clock: the next slot has a position
         credits = Signal(range(self.queue_depth + 1), init=self.queue_depth)
@@ -168,7 +167,7 @@ class NpStereoCore(wiring.Component):
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
         outstanding = Signal(range(8))
-        frame_done = lr.produce & (lr.x == width - 1) & (lr.y == height - 1)
+        frame_done = lr.produce & lr.frame_end
 
         # Framing and admission. An explicit state register and if/else chains rather
         # than m.FSM: Amaranth's FSM emits partial case statements that Verilator's lint
@@ -310,10 +309,13 @@ def _queue(m, name, incoming, push_valid, pop, ready):
     """
     entries = [Signal.like(incoming, name=f"{name}{i}") for i in range(2)]
     level = Signal(range(3), name=f"{name}_level")
+    # "Not empty" is a register of its own: the admission's proposal reads it.
+    valid = Signal(name=f"{name}_valid")
     push = push_valid & (level != 2)
     m.d.comb += ready.eq(level != 2)
     kept = level - pop  # words left after this clock's pop, before the push
-    m.d.sync += level.eq(kept + push)
+    m.d.sync += [level.eq(kept + push),
+                 valid.eq(push | (level == 2) | ((level == 1) & ~pop))]
     with m.If(pop):
         m.d.sync += entries[0].eq(entries[1])
     with m.If(push):
@@ -321,4 +323,4 @@ def _queue(m, name, incoming, push_valid, pop, ready):
             m.d.sync += entries[0].eq(incoming)
         with m.Else():
             m.d.sync += entries[1].eq(incoming)
-    return entries[0], level != 0
+    return entries[0], valid

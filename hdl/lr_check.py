@@ -70,6 +70,8 @@ class LRCheck(wiring.Component):
         With ``retire``: an output word, for an in-frame position.
     valid, disparity_out, x, y : Out
         The word and its position (with ``produce``).
+    frame_start, line_end, frame_end : Out(1)
+        The position is (0, 0), the last of its row, the last of its frame.
     latency : int
         Clocks from the input to ``retire``.
     """
@@ -93,6 +95,7 @@ class LRCheck(wiring.Component):
             "retire": Out(1), "produce": Out(1),
             "valid": Out(1), "disparity_out": Out(d_bits),
             "x": Out(layout["x"].shape), "y": Out(layout["y"].shape),
+            "frame_start": Out(1), "line_end": Out(1), "frame_end": Out(1),
         })
 
     def _in_frame(self, tag):
@@ -111,7 +114,10 @@ class LRCheck(wiring.Component):
                 m.d.sync += [self.retire.eq(0), self.produce.eq(0)]
             m.d.sync += [self.valid.eq(tag.x >= p.first_valid_column),
                          self.disparity_out.eq(self.disparity),
-                         self.x.eq(tag.x), self.y.eq(tag.y)]
+                         self.x.eq(tag.x), self.y.eq(tag.y),
+                         self.frame_start.eq((tag.x == 0) & (tag.y == 0)),
+                         self.line_end.eq(tag.x == p.width - 1),
+                         self.frame_end.eq((tag.x == p.width - 1) & (tag.y == p.height - 1))]
             return m
         final, leaving = self._right_winners(m, slots)
         self._check(m, slots, final, leaving)
@@ -229,33 +235,41 @@ class LRCheck(wiring.Component):
                      history_write.en.eq(leaving), history_write.data.eq(final),
                      left_read.addr.eq(checked_address)]
         # Clock 1: the RAM; 2: its output register; 3: the partner's address; 4: the RAM;
-        # 5: its output register; 6: the check's result.
+        # 5: its output register; 6: the comparisons with the bounds; 7: the result.
         entry = pipe(m, left_read.data, 1, "checked_left")
         checked_index = pipe(m, checked_address, 2, "checked_index")
         partner_address = Signal(index_shape, name="partner_address", reset_less=True)
         m.d.sync += partner_address.eq(checked_index - entry.d)
         m.d.comb += history_read.addr.eq(partner_address)
         partner = pipe(m, history_read.data, 1, "partner")
-        checked = pipe(m, entry, 3, "checked_left_late")
-        stage = pipe(m, Cat(leaving, primed), 5, "check_pulse", reset=True)
+        checked = pipe(m, entry, 4, "checked_left_late")
+        stage = pipe(m, Cat(leaving, primed), 6, "check_pulse", reset=True)
         # What does not depend on dR is decided while dR is read.
         placed = Signal(name="checked_placed")
         in_frame = Signal(name="checked_in_frame")
         m.d.sync += [placed.eq((entry.tag.x >= entry.d) &
                                (entry.tag.x >= p.first_valid_column)),
                      in_frame.eq(self._in_frame(entry.tag))]
-        kept = pipe(m, placed, 2, "checked_placed")
-        in_frame = pipe(m, in_frame, 2, "checked_in_frame")
+        kept = pipe(m, placed, 3, "checked_placed")
+        in_frame = pipe(m, in_frame, 3, "checked_in_frame")
         if p.lr_threshold is not None:
             low = Signal(range(-p.lr_threshold, depth), name="consistent_low")
             high = Signal(range(depth + p.lr_threshold), name="consistent_high")
             m.d.sync += [low.eq(entry.d - p.lr_threshold), high.eq(entry.d + p.lr_threshold)]
             low, high = pipe(m, low, 2, "consistent_low"), pipe(m, high, 2, "consistent_high")
-            kept = kept & _consistent(partner, low, high)
+            consistent = Signal(name="consistent")
+            m.d.sync += consistent.eq(_consistent(partner, low, high))
+            kept = kept & consistent
+        # The word's framing flags, formed from registers here rather than from the output
+        # registers by the core (they feed the output queue and the flush's count).
+        tag = checked.tag
         m.d.sync += [
             self.retire.eq(stage[0]),
             self.produce.eq(stage[0] & stage[1] & in_frame),
             self.valid.eq(kept),
             self.disparity_out.eq(checked.d),
-            self.x.eq(checked.tag.x), self.y.eq(checked.tag.y),
+            self.x.eq(tag.x), self.y.eq(tag.y),
+            self.frame_start.eq((tag.x == 0) & (tag.y == 0)),
+            self.line_end.eq(tag.x == p.width - 1),
+            self.frame_end.eq((tag.x == p.width - 1) & (tag.y == p.height - 1)),
         ]

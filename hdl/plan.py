@@ -205,8 +205,9 @@ def lr_timing(params, left):
     """The L/R check's offsets, for left winners arriving ``left`` clocks after the sums.
 
     The last unit's stage B of round R-1 (LR_STAGE_A + 1 + R - 1), then a register: the
-    final dR. Its check then takes 6 clocks (left winners' RAM and its output register,
-    the partner's address, the history RAM and its output register, the result). The
+    final dR. Its check then takes 7 clocks (left winners' RAM and its output register,
+    the partner's address, the history RAM and its output register, the two comparisons
+    with the consistency bounds, the result). The
     stores are indexed by position: the left side writes ``left`` clocks after the input,
     the check reads at ``exit``; in between the left side runs ahead by up to
     ceil((exit - left) / R) + 1 positions, and the history is read 3 clocks after
@@ -218,7 +219,7 @@ def lr_timing(params, left):
     exit_ = LR_STAGE_A + 1 + rounds
     ahead = max(-(-(exit_ - left) // rounds) + 1, 0)
     history = 1 << (params.disparities + ahead + 6 - 1).bit_length()
-    return LRTiming(left, exit_, history, exit_ + 6)
+    return LRTiming(left, exit_, history, exit_ + 7)
 
 
 @dataclass(frozen=True)
