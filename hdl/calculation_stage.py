@@ -254,10 +254,10 @@ class CalculationStage(wiring.Component):
         x_minus_round = Signal(range(-p.disparities, p.width), name="x_minus_round")
         m.d.sync += x_minus_round.eq(early.x - round_base(m, slots, start - 1, units))
         all_pairs, some_pairs = Signal(name="all_pairs"), Signal(name="some_pairs")
-        low = Signal(range(units), name="x_minus_round_low")
-        m.d.sync += [all_pairs.eq(x_minus_round >= units),
-                     some_pairs.eq(x_minus_round >= 0),
-                     low.eq(x_minus_round[:len(low)])]
+        m.d.sync += [all_pairs.eq(x_minus_round >= units), some_pairs.eq(x_minus_round >= 0)]
+        if units > 1:
+            low = Signal(range(units), name="x_minus_round_low")
+            m.d.sync += low.eq(x_minus_round[:len(low)])
         rows_ok = []
         for k in range(self.rows):
             ok = Signal(name=f"cost_row_ok{k}")
@@ -272,7 +272,8 @@ class CalculationStage(wiring.Component):
         masked = []
         for i, units in enumerate(self.cost_units):
             in_row = Signal(name=f"in_row{i}")
-            m.d.sync += in_row.eq(all_pairs | (some_pairs & (low >= i)))
+            # Unit 0 needs only x - j*D/R >= 0 (a constant comparison fails Verilator's lint).
+            m.d.sync += in_row.eq(all_pairs | (some_pairs & (low >= i)) if i else some_pairs)
             in_row = pipe(m, in_row, self.costed - start - 2, f"in_row{i}")
             row_costs = []
             for k, unit in enumerate(units):

@@ -184,7 +184,6 @@ class NpStereoCore(wiring.Component):
         end_of_frame = end_of_line & last_row
         none_outstanding = Signal(init=1, name="none_outstanding")
         m.d.sync += none_outstanding.eq(outstanding == 0)  # a clock late: a flush ends late
-        can_start = head_valid & head.user & ~inp.switch_pending & has_credit
         idle, framing, filling = (state == n for n in (IDLE, FRAME, FILL))
 
         # The proposal for the next slot, from registers only. With R >= 2 it is made in
@@ -194,8 +193,33 @@ class NpStereoCore(wiring.Component):
         # only an applied decision pops the queue or takes a credit. So the decision, the
         # pop and the queue's next head no longer form a loop of one clock (9.9 ns, 6
         # levels on ECP5). With R = 1 the proposal is applied in the clock it is made.
-        # The proposal also carries the framing state that follows it (``change``,
-        # ``state``), so applying it is one multiplexer in front of the state register.
+        # With R >= 3 the conditions it combines are themselves registered in round R-3
+        # (by the same argument, over two clocks), so that neither half is more than two
+        # or three LUTs deep. The proposal also carries the framing state that follows it
+        # (``change``, ``state``): applying it is one multiplexer in front of the state.
+        conditions = data.StructLayout({name: 1 for name in (
+            "drop", "can_start", "restart", "can_take", "misframed", "last_beat",
+            "frame_end", "credit", "flush_start", "done")})
+        now = Signal(conditions)
+        can_start = head_valid & head.user & ~inp.switch_pending & has_credit
+        m.d.comb += [
+            now.drop.eq(head_valid & ~head.user),       # a beat without a start of frame
+            now.can_start.eq(can_start),
+            now.restart.eq(head_valid & head.user),     # a start of frame inside a frame
+            now.can_take.eq(head_valid & has_credit),
+            now.misframed.eq(head.last != end_of_line),
+            now.last_beat.eq(head.last),
+            now.frame_end.eq(end_of_line & last_row),
+            now.credit.eq(has_credit),
+            now.flush_start.eq(line_start & can_start),
+            now.done.eq(none_outstanding),
+        ]
+        if rounds >= 3:
+            given = Signal(conditions, name="admission_conditions")
+            m.d.sync += given.eq(now)
+        else:
+            given = now
+
         proposal = data.StructLayout({
             **{name: 1 for name in ("admit", "take", "start", "overlap", "pop", "error",
                                     "change")},
@@ -209,37 +233,38 @@ class NpStereoCore(wiring.Component):
             # A line of one pixel cannot end on the first pixel: width > 2 always.
             return [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
                     proposed.overlap.eq(overlapping), proposed.pop.eq(1),
-                    proposed.error.eq(head.last), *to(Mux(head.last, FILL, FRAME))]
+                    proposed.error.eq(given.last_beat),
+                    *to(Mux(given.last_beat, FILL, FRAME))]
 
         with m.If(idle):
-            with m.If(head_valid & ~head.user):
+            with m.If(given.drop):
                 # Outside a frame every beat without a start of frame is dropped.
                 m.d.comb += [proposed.pop.eq(1), proposed.error.eq(1)]
-            with m.Elif(can_start):
+            with m.Elif(given.can_start):
                 m.d.comb += start_frame(0)
         with m.Elif(framing):
-            with m.If(head_valid & head.user):
+            with m.If(given.restart):
                 m.d.comb += [proposed.error.eq(1), *to(FILL)]
-            with m.Elif(head_valid & has_credit):
+            with m.Elif(given.can_take):
                 m.d.comb += [proposed.admit.eq(1), proposed.take.eq(1), proposed.pop.eq(1),
-                             proposed.error.eq(head.last != end_of_line)]
-                with m.If(end_of_frame):
+                             proposed.error.eq(given.misframed)]
+                with m.If(given.frame_end):
                     m.d.comb += to(FLUSH)
-                with m.Elif(head.last != end_of_line):
+                with m.Elif(given.misframed):
                     m.d.comb += to(FILL)
         with m.Elif(filling):
-            m.d.comb += proposed.admit.eq(has_credit)
-            with m.If(has_credit & end_of_frame):
+            m.d.comb += proposed.admit.eq(given.credit)
+            with m.If(given.credit & given.frame_end):
                 m.d.comb += to(FLUSH)
         with m.Else():  # FLUSH
-            with m.If(head_valid & ~head.user):
+            with m.If(given.drop):
                 m.d.comb += [proposed.pop.eq(1), proposed.error.eq(1)]
-            with m.If(none_outstanding):
+            with m.If(given.done):
                 m.d.comb += to(IDLE)
-            with m.Elif(line_start & can_start):
+            with m.Elif(given.flush_start):
                 m.d.comb += start_frame(1)
             with m.Else():
-                m.d.comb += proposed.admit.eq(has_credit)
+                m.d.comb += proposed.admit.eq(given.credit)
         chosen = Signal(proposal)
         if rounds == 1:
             m.d.comb += chosen.eq(proposed)

@@ -259,8 +259,10 @@ class InputStage(wiring.Component):
                 m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
                              switch_window.eq(tag_lag == window_event),
                              switch_tag.eq(tag_lag == 1)]
-            with m.Elif(countdown != 0):
-                m.d.sync += [countdown.eq(countdown - 1), pending.eq(countdown > 1),
+            with m.Elif(pending):
+                # pending is countdown != 0, switch_tag is countdown == 1: registers, not
+                # comparisons of the countdown in front of its own enable.
+                m.d.sync += [countdown.eq(countdown - 1), pending.eq(~switch_tag),
                              switch_window.eq(countdown == window_event + 1),
                              switch_tag.eq(countdown == 2)]
 
