@@ -16,20 +16,6 @@ from npstereo.golden.quality import evaluate
 D = 16
 
 
-@pytest.fixture
-def pair_files(tmp_path, small_pair):
-    """The small synthetic pair as RGB PNGs and a Middlebury-2003 folder."""
-    left, right = tmp_path / "left.png", tmp_path / "right.png"
-    Image.fromarray(small_pair.left).save(left)
-    Image.fromarray(small_pair.right).save(right)
-    scene = tmp_path / "scene"
-    scene.mkdir()
-    Image.fromarray(small_pair.left).save(scene / "im2.png")
-    Image.fromarray(small_pair.right).save(scene / "im6.png")
-    Image.fromarray((4 * small_pair.ground_truth).astype(np.uint8)).save(scene / "disp2.pgm")
-    return left, right, scene
-
-
 def files_under(path):
     return sorted(p.relative_to(path) for p in path.rglob("*"))
 
