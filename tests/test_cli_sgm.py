@@ -112,7 +112,8 @@ NO_HARDWARE = ("aggregation sgm: the hardware has no semi-global aggregation yet
                "model has it (match, eval, paper, demo)")
 
 #: Options that a grid command (eval) accepts: two aggregations are two configurations.
-GRID = [["--aggregation", "sgm", "--aggregation", "3"], ["--aggregation", "3", "--aggregation", "5"]]
+GRID = [["--aggregation", "sgm", "--aggregation", "3"],
+        ["--aggregation", "3", "--aggregation", "5"]]
 
 #: (options after the command's own, exact message; ``{command}`` is the command's name).
 BAD = [
