@@ -10,8 +10,10 @@ from PIL import Image
 
 from npstereo.gen.cli import main
 from npstereo.params import StereoParams
+from npstereo.golden import sgm
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
+from npstereo.golden.synthetic import synthetic_pair
 
 D = 16
 
@@ -184,7 +186,23 @@ def test_paper_on_the_synthetic_scene(capsys, tmp_path):
     assert len(results["results"]) == 4 * 4
     clean = [r for r in results["results"] if r["condition"] == "clean"]
     assert all(r["correct"] > 50 for r in clean)
-    assert "| census |" in (out / "README.md").read_text()
+    readme = (out / "README.md").read_text()
+    assert "| census |" in readme
+    # The SGM rows are measured: the default and census 5x5 under all four conditions,
+    # the clean ones equal to the golden SGM map scored here.
+    assert [(r["condition"], r["block"]) for r in results["sgm"]][:4] == [
+        ("clean", 7), ("clean", 5), ("noise 0.002", 7), ("noise 0.002", 5)]
+    assert len(results["sgm"]) == 2 * 4
+    pair = synthetic_pair(disparities=D)
+    for row in results["sgm"][:2]:
+        params = StereoParams("census", row["block"], D)
+        map_ = sgm.disparity_map(*pair.gray(), params, row["p1"], row["p2"],
+                                 adapt=row["p2_adapt"] or None).disparity
+        expected = evaluate(map_, pair.ground_truth, D)
+        assert row["correct"] == pytest.approx(expected.correct)
+        assert f"| {row['configuration']} | {expected.correct:.2f} |" in readme
+    assert (row["p1"], row["p2"], row["p2_adapt"]) == (16, 96, 4)
+    assert results["sgm"][0]["configuration"] == "census 7x7, SGM P1=24 P2=79 t=5 (default)"
 
 
 def test_paper_and_demo_bad_inputs(capsys, tmp_path):
