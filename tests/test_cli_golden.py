@@ -224,17 +224,31 @@ def test_paper_and_demo_bad_inputs(capsys, tmp_path):
         assert_user_error(capsys, tmp_path, argv, word)
 
 
-def test_demo_writes_maps_and_summary(capsys, tmp_path):
+def test_demo_writes_maps_and_summary(capsys, tmp_path, default_pair):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--block", "7", "--no-hardware"]) == 0
     summary = json.loads((out / "golden.json").read_text())
-    assert [r["transform"] for r in summary["results"]] == [
-        "rank", "census", "ext-rank", "ext-census"]
+    assert [(r["name"], r["transform"], r["block"]) for r in summary["results"]] == [
+        ("rank", "rank", 7), ("census", "census", 7), ("ext-rank", "ext-rank", 7),
+        ("ext-census", "ext-census", 7), ("sgm", "census", 7)]
     assert all(r["correct"] > 70 for r in summary["results"])
-    for name in ("left", "right", "ground_truth", "rank", "census", "ext-rank", "ext-census"):
+    for name in ("left", "right", "ground_truth", "rank", "census", "ext-rank", "ext-census",
+                 "sgm"):
         assert (out / f"{name}.png").stat().st_size > 0
-    assert "census" in capsys.readouterr().out
-    assert "| ext-census |" in (out / "summary.md").read_text()
+    printed = capsys.readouterr().out
+    assert "census" in printed
+    text = (out / "summary.md").read_text()
+    assert "| ext-census 7x7 | A=3 |" in text
+    # The SGM row is the golden SGM map with the defaults, measured.
+    row = summary["results"][-1]
+    params = StereoParams("census", 7, 32)
+    expected = evaluate(sgm.disparity_map(*default_pair.gray(), params, sgm.DEFAULT_P1,
+                                          sgm.DEFAULT_P2, adapt=sgm.DEFAULT_ADAPT).disparity,
+                        default_pair.ground_truth, 32)
+    assert row["correct"] == pytest.approx(expected.correct)
+    assert row["aggregation"] == "SGM P1=24 P2=79 t=5"
+    assert f"| census 7x7 | SGM P1=24 P2=79 t=5 | {expected.correct:.2f} |" in text
+    assert f"census 7x7 SGM P1=24 P2=79 t=5     correct {expected.correct:6.2f}%" in printed
 
 
 def test_eval_in_parallel_processes_gives_the_same_numbers(capsys, tmp_path, pair_files):
