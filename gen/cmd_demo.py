@@ -1,8 +1,9 @@
 """``npstereo demo``: the main job on the embedded synthetic scene, no external files needed.
 
-:func:`golden_demo` is the golden-model part (disparity maps of all four transforms and
-their quality); :func:`hardware_demo` generates the Verilog of one core for the scene and
-co-simulates the whole frame under Verilator, bit for bit against the golden map.
+:func:`golden_demo` is the golden-model part (disparity maps of all four transforms with
+the paper's 3x3 box, the semi-global default beside them, and their quality);
+:func:`hardware_demo` generates the Verilog of one core for the scene and co-simulates the
+whole frame under Verilator, bit for bit against the golden map.
 """
 
 import json
@@ -10,6 +11,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from ..golden import sgm
 from ..golden.quality import evaluate
 from ..golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
 from ..hdl.verilog import core_verilog
@@ -23,16 +25,31 @@ from .images import save_disparity_png, save_gray_png
 __all__ = ["add_parser", "run", "golden_demo"]
 
 
+#: File name (without .png) of the semi-global map beside the transforms' box maps.
+SGM_NAME = "sgm"
+
+
+def demo_configurations(block):
+    """``(name, params)`` of the demo's maps: every transform with the 3x3 box at
+    ``block``, then the SGM default (census 7x7, ``golden.sgm.RECOMMENDED[0]``)."""
+    box = [(t, StereoParams(transform=t, block=block, disparities=DEFAULT_DISPARITIES))
+           for t in TRANSFORMS]
+    return box + [(SGM_NAME, StereoParams(**sgm.RECOMMENDED[0],
+                                          disparities=DEFAULT_DISPARITIES))]
+
+
 def golden_demo(out, block=9, seed=0):
-    """Golden-model disparity maps of the default synthetic scene for every transform.
+    """Golden-model disparity maps of the default synthetic scene for every transform with
+    the 3x3 box, and with the SGM default beside them.
 
     Writes ``left.png``, ``right.png``, ``ground_truth.png``, ``<transform>.png``,
-    ``golden.json`` and ``summary.md`` into ``out``.
+    ``sgm.png``, ``golden.json`` and ``summary.md`` into ``out``.
 
     Returns
     -------
     list of dict
-        One row per transform: parameters and the quality metrics.
+        One row per map: its name (the transform, or ``sgm``), the transform, the
+        aggregation, the parameters' description and the quality metrics.
     """
     out = Path(out)
     pair = synthetic_pair(seed=seed)
@@ -40,25 +57,28 @@ def golden_demo(out, block=9, seed=0):
     top = DEFAULT_DISPARITIES - 1
     rows = []
     maps = {}
-    for transform in TRANSFORMS:
-        params = StereoParams(transform=transform, block=block, disparities=DEFAULT_DISPARITIES)
-        maps[transform] = match_images(left, right, params)
-        quality = evaluate(maps[transform], pair.ground_truth, params.disparities)
-        rows.append({"transform": transform, "params": params.describe(), **quality.as_dict()})
+    for name, params in demo_configurations(block):
+        maps[name] = match_images(left, right, params)
+        quality = evaluate(maps[name], pair.ground_truth, params.disparities)
+        rows.append({"name": name, "transform": params.transform, "block": params.block,
+                     "aggregation": params.describe_aggregation(),
+                     "params": params.describe(), **quality.as_dict()})
     save_gray_png(out / "left.png", pair.left)
     save_gray_png(out / "right.png", pair.right)
     save_disparity_png(out / "ground_truth.png", pair.ground_truth, top)
-    for transform, disparity in maps.items():
-        save_disparity_png(out / f"{transform}.png", disparity, top)
+    for name, disparity in maps.items():
+        save_disparity_png(out / f"{name}.png", disparity, top)
     write_text(out / "golden.json", json.dumps({"scene": pair.name, "results": rows}, indent=1)
                + "\n")
     lines = [f"# Golden model on {pair.name}", "",
-             f"{block}x{block} transform, D = {DEFAULT_DISPARITIES}, 3x3 aggregation, L/R "
-             "check T = 3. Correct = |d - gt| <= 1 over pixels with x >= D.", "",
-             "| transform | correct (%) | density (%) | error rate (%) | map |",
-             "|---|---:|---:|---:|---|"]
-    lines += [f"| {r['transform']} | {r['correct']:.2f} | {r['density']:.2f} | "
-              f"{r['error_rate']:.2f} | ![{r['transform']}]({r['transform']}.png) |" for r in rows]
+             f"D = {DEFAULT_DISPARITIES}, L/R check T = 3; the four transforms {block}x{block} "
+             "with the paper's 3x3 aggregation, then semi-global aggregation (SGM) with its "
+             "defaults. Correct = |d - gt| <= 1 over pixels with x >= D.", "",
+             "| transform | aggregation | correct (%) | density (%) | error rate (%) | map |",
+             "|---|---|---:|---:|---:|---|"]
+    lines += [f"| {r['transform']} {r['block']}x{r['block']} | {r['aggregation']} | "
+              f"{r['correct']:.2f} | {r['density']:.2f} | {r['error_rate']:.2f} | "
+              f"![{r['name']}]({r['name']}.png) |" for r in rows]
     lines += ["", "Ground truth: ![ground truth](ground_truth.png)", ""]
     write_text(out / "summary.md", "\n".join(lines))
     return rows
@@ -89,10 +109,11 @@ def run(args):
     StereoParams(block=args.block, disparities=DEFAULT_DISPARITIES)
     with output_errors():
         rows = golden_demo(args.out, block=args.block, seed=args.seed)
-    print(f"golden model on the synthetic scene (seed {args.seed}), {args.block}x{args.block} "
-          f"transform, D={DEFAULT_DISPARITIES}, 3x3 aggregation, L/R check T=3:")
+    print(f"golden model on the synthetic scene (seed {args.seed}), D={DEFAULT_DISPARITIES}, "
+          f"L/R check T=3:")
     for row in rows:
-        print(f"  {row['transform']:<11} correct {row['correct']:6.2f}%  "
+        label = f"{row['transform']} {row['block']}x{row['block']} {row['aggregation']}"
+        print(f"  {label:<34} correct {row['correct']:6.2f}%  "
               f"density {row['density']:6.2f}%  error rate {row['error_rate']:5.2f}%")
     print(f"disparity PNGs, summary.md and golden.json in {args.out}")
     if args.no_hardware:
@@ -110,11 +131,14 @@ def run(args):
 def add_parser(subparsers):
     parser = subparsers.add_parser(
         "demo", help="run everything on the embedded synthetic scene",
-        description="Golden-model disparity maps of all four transforms on the seeded "
-                    "synthetic scene, with ground truth and correct matches; then the Verilog "
-                    "of a census core for the scene, co-simulated under Verilator bit for bit.")
+        description="Golden-model disparity maps of all four transforms (3x3 aggregation) "
+                    "and of semi-global aggregation (census 7x7, the SGM defaults) on the "
+                    "seeded synthetic scene, with ground truth and correct matches; then the "
+                    "Verilog of a census core for the scene, co-simulated under Verilator bit "
+                    "for bit.")
     parser.add_argument("--out", default="build/demo", help="output folder (default build/demo)")
-    parser.add_argument("--block", type=int, default=9, help="transform block size (default 9)")
+    parser.add_argument("--block", type=int, default=9,
+                        help="transform block size of the box maps (default 9)")
     parser.add_argument("--seed", type=int, default=0, help="scene seed (default 0)")
     parser.add_argument("--no-hardware", action="store_true",
                         help="golden model only: skip Verilog generation and co-simulation")

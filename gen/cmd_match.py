@@ -3,6 +3,7 @@
 Also home of the stereo-parameter options shared by ``eval``, ``paper`` and ``demo``.
 """
 
+import argparse
 import contextlib
 import os
 from pathlib import Path
@@ -11,17 +12,41 @@ import numpy as np
 
 from ..golden.data import read_image, to_gray
 from ..golden.pipeline import disparity_map
-from ..params import LINE_BUFFERS, TRANSFORMS, StereoParams, UserError
+from ..params import (LINE_BUFFERS, P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1,
+                      SGM_DEFAULT_P2, SGM_MAX_ADAPT, TRANSFORMS, StereoParams, UserError)
 from .atomic import atomic_path
 from .images import save_disparity_png
 
 __all__ = ["add_parser", "run", "add_matching_arguments", "add_hardware_arguments",
-           "params_from_args", "match_images",
+           "aggregation_value", "aggregations_from_args", "params_from_args", "match_images",
            "save_raw", "output_errors", "check_output_folder"]
 
 
-def add_matching_arguments(parser, many=False, max_block=None, max_disparities=None):
-    """Options of the matching pipeline; with ``many``, transform and block take lists.
+#: The aggregation when ``--aggregation`` is not given: the paper's 3 x 3 box.
+DEFAULT_AGGREGATION = 3
+
+
+def aggregation_value(text):
+    """Type of ``--aggregation``: ``sgm`` or a window size (StereoParams checks the size)."""
+    if text == SGM:
+        return SGM
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be an odd window size or {SGM}, not {text!r}") from None
+
+
+def add_matching_arguments(parser, many=False, max_block=None, max_disparities=None,
+                           positionals=False):
+    """Options of the matching pipeline; with ``many``, transform, block and aggregation
+    take lists (a grid of configurations).
+
+    ``--aggregation`` is always collected as a list (``None`` when not given), so that a
+    command of one configuration names a second value in its error
+    (:func:`aggregations_from_args`) instead of silently keeping the last. It takes several
+    values per occurrence, except for a command with ``positionals`` (``match``), whose
+    image arguments it would swallow: there each ``--aggregation`` takes one.
 
     ``max_block``, ``max_disparities``: the limits of a command that generates hardware
     (:mod:`npstereo.hdl.plan`), named in the help; the golden model has none.
@@ -39,12 +64,30 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
                              + " (default 100, as in the paper)")
     parser.add_argument("--rounds", type=int, default=1,
                         help="calculation rounds R, must divide D (default 1)")
-    parser.add_argument("--aggregation", type=int, default=3,
-                        help="cost aggregation window A, odd >= 1 (default 3)")
+    parser.add_argument("--aggregation", type=aggregation_value, metavar="A|sgm",
+                        nargs=None if positionals else "+",
+                        action="append" if positionals else "extend",
+                        help="cost aggregation: an A x A box, A odd >= 1, or sgm "
+                             "(semi-global, four paths)" + (" (one or more)" if many else "")
+                             + f" (default {DEFAULT_AGGREGATION})")
     lr = parser.add_mutually_exclusive_group()
     lr.add_argument("--lr-threshold", type=int, default=3,
                     help="left/right consistency threshold T >= 0 (default 3)")
     lr.add_argument("--no-lr-check", action="store_true", help="skip the left/right check")
+    sgm = parser.add_argument_group("semi-global aggregation (only with --aggregation sgm)")
+    sgm.add_argument("--p1", type=int, metavar="N",
+                     help=f"penalty of a disparity step of 1 along a path, 0 <= P1 <= P2 "
+                          f"(default {SGM_DEFAULT_P1})")
+    sgm.add_argument("--p2", type=int, metavar="N",
+                     help="penalty of a larger step, P1 <= P2 <= 2^(bitlen(Cmax) + 2) - 1 - "
+                          "Cmax for the transform's largest cost Cmax (census 7x7: 207) "
+                          f"(default {SGM_DEFAULT_P2})")
+    adapt = sgm.add_mutually_exclusive_group()
+    adapt.add_argument("--p2-adapt", type=int, metavar="T",
+                       help=f"adaptive P2: halved for every doubling of the intensity step "
+                            f"along the path from 2^T on, 1 <= T <= {SGM_MAX_ADAPT} "
+                            f"(default {SGM_DEFAULT_ADAPT})")
+    adapt.add_argument("--no-p2-adapt", action="store_true", help="a constant P2")
 
 
 def add_hardware_arguments(parser):
@@ -56,14 +99,50 @@ def add_hardware_arguments(parser):
                              "transforms (default auto)")
 
 
-def params_from_args(args, transform=None, block=None):
-    """The validated StereoParams of the parsed options (one transform and block)."""
+def _sgm_options(args):
+    """The SGM options given on the command line, as the user spelled them."""
+    given = [name for name, value in (("--p1", args.p1), ("--p2", args.p2),
+                                      ("--p2-adapt", args.p2_adapt)) if value is not None]
+    return given + (["--no-p2-adapt"] if args.no_p2_adapt else [])
+
+
+def aggregations_from_args(args, many=False):
+    """The ``--aggregation`` values after the checks only the command line can make.
+
+    A command of one configuration (``many`` false) takes one value; the SGM options need
+    ``sgm`` among the values. Raises :class:`UserError` (one line) otherwise.
+    """
+    values = args.aggregation or [DEFAULT_AGGREGATION]
+    if not many and len(values) > 1:
+        if SGM in values and len(set(values)) > 1:
+            windows = " ".join(str(v) for v in values if v != SGM)
+            raise UserError(f"--aggregation sgm replaces the aggregation window: give sgm or "
+                            f"a window size, not both (sgm and {windows})")
+        raise UserError(f"--aggregation takes one value for one configuration, not "
+                        f"{' '.join(str(v) for v in values)}")
+    given = _sgm_options(args)
+    if given and SGM not in values:
+        verb = "is an SGM option: it needs" if len(given) == 1 else \
+            "are SGM options: they need"
+        raise UserError(f"{' and '.join(given)} {verb} --aggregation sgm")
+    return values
+
+
+def params_from_args(args, transform=None, block=None, aggregation=None):
+    """The validated StereoParams of the parsed options (one transform, block and
+    aggregation; without ``aggregation`` the command line's only one)."""
+    if aggregation is None:
+        (aggregation,) = aggregations_from_args(args)
+    sgm = aggregation == SGM
+    adapt = P2_ADAPT_OFF if args.no_p2_adapt else args.p2_adapt
     return StereoParams(
         transform=args.transform if transform is None else transform,
         block=args.block if block is None else block,
-        disparities=args.disparities, rounds=args.rounds, aggregation=args.aggregation,
+        disparities=args.disparities, rounds=args.rounds, aggregation=aggregation,
         lr_threshold=None if args.no_lr_check else args.lr_threshold,
-        line_buffer=getattr(args, "line_buffer", "auto"))
+        line_buffer=getattr(args, "line_buffer", "auto"),
+        p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
+        p2_adapt=adapt if sgm else None)
 
 
 def match_images(left, right, params, threads=None):
@@ -137,7 +216,7 @@ def add_parser(subparsers):
                     "the bit-exact golden model. Colour images are converted to gray (BT.601).")
     parser.add_argument("left", help="left (reference) image, 8-bit gray or RGB")
     parser.add_argument("right", help="right image, same size")
-    add_matching_arguments(parser)
+    add_matching_arguments(parser, positionals=True)
     parser.add_argument("--out", required=True,
                         help="colour-mapped disparity PNG (invalid pixels black)")
     parser.add_argument("--raw", help="also write the H x W int16 map (-1 invalid) as .npy")

@@ -3,7 +3,9 @@
 Runs every transform at every block size on the clean scene (Fig. 6), with gaussian noise
 of variance 0.002 (Fig. 8) and with the bayer stand-in in place of the paper's bayer-camera
 scenes (Figs. 10-11), and writes a markdown report with the paper's teddy numbers side by
-side, PNG plots, Fig. 12-style disparity images and all numbers as JSON.
+side, PNG plots, Fig. 12-style disparity images and all numbers as JSON. Beyond the paper,
+the recommended semi-global configurations (``golden.sgm.RECOMMENDED``) are measured under
+the same conditions and shown beside each figure's table and in the Fig. 12 grid.
 """
 
 import json
@@ -11,17 +13,19 @@ from pathlib import Path
 
 import numpy as np
 
+from ..golden import sgm
 from ..golden.data import load_middlebury
 from ..golden.quality import evaluate
 from ..golden.synthetic import synthetic_pair
-from ..params import TRANSFORMS, StereoParams, UserError
+from ..params import SGM, TRANSFORMS, StereoParams, UserError
 from .atomic import write_text
 from .cmd_eval import Condition, condition_images, run_jobs
 from .cmd_match import check_output_folder, output_errors
 from .images import save_disparity_png
 from .plots import disparity_grid, plot_series
 
-__all__ = ["add_parser", "run", "PAPER_FIG6", "PAPER_FIG8", "BLOCKS", "paper_sweep"]
+__all__ = ["add_parser", "run", "PAPER_FIG6", "PAPER_FIG8", "BLOCKS", "paper_sweep",
+           "sgm_configurations"]
 
 BLOCKS = (7, 9, 11, 13, 15, 17, 19)
 
@@ -64,29 +68,59 @@ def _mad(measured, reference):
     return float(np.mean([abs(m - r) for m, r in pairs])) if pairs else None
 
 
-def paper_sweep(pair, conditions, blocks, disparities, jobs_n):
-    """Correct matches of every transform x block x condition.
+def sgm_configurations(disparities):
+    """The semi-global configurations measured beside the paper's box: the defaults
+    (census 7x7) and census 5x5 with its own penalties (``golden.sgm.RECOMMENDED``)."""
+    return [StereoParams(**fields, disparities=disparities) for fields in sgm.RECOMMENDED]
 
-    Returns ``(rows, maps)``: one result dict per run and the disparity maps of the
-    largest block size per (condition label, transform), for the Fig. 12-style images.
+
+def _sgm_label(params, semi_global):
+    """``census 7x7, SGM P1=24 P2=79 t=5 (default)``: the row name of an SGM configuration."""
+    default = " (default)" if params == semi_global[0] else ""
+    return (f"{params.transform} {params.block}x{params.block}, "
+            f"{params.describe_aggregation()}{default}")
+
+
+def paper_sweep(pair, conditions, blocks, disparities, jobs_n):
+    """Correct matches of every transform x block x condition, and of every SGM
+    configuration (:func:`sgm_configurations`) x condition.
+
+    Returns ``(rows, maps, sgm_rows)``: one result dict per box run, the disparity maps of
+    the largest block size per (condition label, transform) and of the SGM default per
+    (condition label, "sgm"), for the Fig. 12-style images, and one result dict per SGM
+    run (with its parameters and ``describe()``).
     """
     images = {c.label: condition_images(pair, c) for c in conditions}
+    semi_global = sgm_configurations(disparities)
     jobs = {}
     for c in conditions:
         for t in TRANSFORMS:
             for b in blocks:
                 jobs[(c.label, t, b)] = (*images[c.label], StereoParams(t, b, disparities))
+        for params in semi_global:
+            jobs[(c.label, SGM, params)] = (*images[c.label], params)
     results = run_jobs(jobs, jobs_n, desc=f"paper {pair.name}")
-    rows, maps = [], {}
+    rows, maps, sgm_rows = [], {}, []
     for (label, t, b), (disparity, seconds) in results.items():
         quality = evaluate(disparity, pair.ground_truth, disparities)
+        if t == SGM:  # b is then the configuration
+            sgm_rows.append({"condition": label, "configuration": _sgm_label(b, semi_global),
+                             "transform": b.transform, "block": b.block, "p1": b.p1,
+                             "p2": b.p2, "p2_adapt": b.p2_adapt, **quality.as_dict(),
+                             "seconds": seconds})
+            if b == semi_global[0]:
+                maps[(label, SGM)] = disparity
+            continue
         rows.append({"condition": label, "transform": t, "block": b,
                      **quality.as_dict(), "seconds": seconds})
         if b == max(blocks):
             maps[(label, t)] = disparity
     order = {c.label: i for i, c in enumerate(conditions)}
     rows.sort(key=lambda r: (order[r["condition"]], TRANSFORMS.index(r["transform"]), r["block"]))
-    return rows, maps
+    configurations = [_sgm_label(p, semi_global) for p in semi_global]
+    sgm_rows.sort(key=lambda r: (order[r["condition"]],
+                                 configurations.index(r["configuration"])))
+    return rows, maps, sgm_rows
 
 
 def _series(rows, label, metric="correct"):
@@ -117,6 +151,17 @@ def _comparison(title, measured, reference, blocks):
     return "\n".join(lines), mads
 
 
+def _sgm_table(sgm_rows, label):
+    """Markdown rows of the SGM configurations under the condition ``label``."""
+    lines = ["Beyond the paper, semi-global aggregation under the same condition (one "
+             "transform size each):", "",
+             "| configuration | correct (%) | density (%) | error rate (%) |",
+             "|---|---:|---:|---:|"]
+    lines += [f"| {r['configuration']} | {r['correct']:.2f} | {r['density']:.2f} | "
+              f"{r['error_rate']:.2f} |" for r in sgm_rows if r["condition"] == label]
+    return "\n".join(lines)
+
+
 def _measured_table(title, measured, blocks):
     lines = [f"### {title}", "", "| transform | " + " | ".join(f"{b}x{b}" for b in blocks) + " |",
              "|---|" + "---:|" * len(blocks)]
@@ -142,12 +187,12 @@ def run(args):
         conditions += [Condition(bayer=True, seed=args.seed),
                        Condition(bayer=True, gains=BAYER_GAINS, read_noise=BAYER_READ_NOISE,
                                  seed=args.seed)]
-    rows, maps = paper_sweep(pair, conditions, blocks, args.disparities, args.jobs)
+    rows, maps, sgm_rows = paper_sweep(pair, conditions, blocks, args.disparities, args.jobs)
     with output_errors():
-        _write_report(args, pair, conditions, blocks, rows, maps)
+        _write_report(args, pair, conditions, blocks, rows, maps, sgm_rows)
 
 
-def _write_report(args, pair, conditions, blocks, rows, maps):
+def _write_report(args, pair, conditions, blocks, rows, maps, sgm_rows):
     """README.md, plots, Fig. 12 grid and results.json of a finished sweep."""
     # Compare with the paper only for its own configuration (teddy blocks 7..19, D=100).
     is_paper = blocks == BLOCKS and args.disparities == 100 and not args.synthetic
@@ -168,38 +213,51 @@ def _write_report(args, pair, conditions, blocks, rows, maps):
             summary[key] = mads
         else:
             text = _measured_table(title, measured, blocks)
-        sections.append(f"{text}\n\n![{key}]({key}.png)\n")
+        sections.append(f"{text}\n\n{_sgm_table(sgm_rows, condition.label)}\n\n"
+                        f"![{key}]({key}.png)\n")
 
     shown = max_shown_disparity(pair.ground_truth, args.disparities)
     short = {c.label: name for c, name in zip(conditions, ROW_NAMES)}
-    grid = [(short[c.label], [pair.ground_truth] + [maps[(c.label, t)] for t in TRANSFORMS])
-            for c in conditions]
+    grid = [(short[c.label], [pair.ground_truth] + [maps[(c.label, t)] for t in TRANSFORMS]
+             + [maps[(c.label, SGM)]]) for c in conditions]
     largest = max(blocks)
+    default = sgm_configurations(args.disparities)[0]
     disparity_grid(out / "fig12.png", f"{pair.name}: disparity maps after the L/R check, "
-                   f"{largest}x{largest} transform, 3x3 aggregation, D={args.disparities}",
-                   ["ground truth", *TRANSFORMS], grid, shown)
+                   f"{largest}x{largest} transform, 3x3 aggregation, D={args.disparities}; "
+                   f"last column {default.transform} {default.block}x{default.block} with "
+                   f"SGM", ["ground truth", *TRANSFORMS,
+                            f"{default.transform} {default.block}x{default.block} SGM"],
+                   grid, shown)
     save_disparity_png(out / "ground_truth.png", pair.ground_truth, shown)
 
-    total = sum(r["seconds"] for r in rows)
+    total = sum(r["seconds"] for r in rows + sgm_rows)
     document = "\n".join([
         f"# Paper reproduction: {pair.name}", "",
-        f"Generated by `npstereo paper` ({len(rows)} disparity maps, {total:.0f} s of matching "
-        f"with {args.jobs} job(s)). D = {args.disparities}, 3x3 aggregation, L/R check T = 3, "
-        "correct = |d - gt| <= 1 over pixels with known ground truth and x >= D (invalid "
-        f"counts as wrong), noise and bayer seed {args.seed}. What the numbers mean and why "
-        "they differ from the paper: [docs/quality.md](../quality.md). Raw numbers (also "
-        "density and error rate): [results.json](results.json).", "",
+        f"Generated by `npstereo paper` ({len(rows) + len(sgm_rows)} disparity maps, "
+        f"{total:.0f} s of matching with {args.jobs} job(s)). D = {args.disparities}, 3x3 "
+        "aggregation, L/R check T = 3, correct = |d - gt| <= 1 over pixels with known ground "
+        "truth and x >= D (invalid counts as wrong), noise and bayer seed "
+        f"{args.seed}. What the numbers mean and why they differ from the paper: "
+        "[docs/quality.md](../quality.md). Beside each figure the semi-global configurations "
+        "(the SGM default and census 5x5, docs/semantics.md \"Semi-global aggregation\"), "
+        "with the same check and metric. Raw numbers (also density and error rate): "
+        "[results.json](results.json).", "",
         *sections,
         "### Fig. 12-style disparity maps", "",
         "![fig12](fig12.png)", ""])
     write_text(out / "results.json", json.dumps(
         {"dataset": pair.name, "disparities": args.disparities, "blocks": list(blocks),
          "seed": args.seed, "mean_abs_diff": summary, "paper_fig6": PAPER_FIG6,
-         "paper_fig8_best_reading": PAPER_FIG8, "results": rows}, indent=1) + "\n")
+         "paper_fig8_best_reading": PAPER_FIG8, "results": rows, "sgm": sgm_rows},
+        indent=1) + "\n")
     write_text(out / "README.md", document)
     for key, mads in summary.items():
         print(f"{key}: mean abs. diff. to the paper " + ", ".join(
             f"{t} {v:.2f}" for t, v in mads.items() if v is not None))
+    for configuration in dict.fromkeys(r["configuration"] for r in sgm_rows):
+        print(f"{configuration}: correct " + ", ".join(
+            f"{r['condition']} {r['correct']:.2f} %" for r in sgm_rows
+            if r["configuration"] == configuration))
     print(f"wrote {out / 'README.md'}")
 
 

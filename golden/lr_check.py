@@ -1,11 +1,21 @@
-"""Left/right consistency check and the invalid border of the disparity map."""
+"""Left/right consistency check, the invalid border of the disparity map, and the map
+with the raw maps it was checked from (the result of the box and the SGM pipelines)."""
 
 import numpy as np
 
-__all__ = ["INVALID", "lr_check", "invalidate_border"]
+__all__ = ["INVALID", "DisparityResult", "lr_check", "invalidate_border"]
 
 #: Golden-model code of an invalid pixel (the hardware clears its valid flag instead).
 INVALID = -1
+
+
+class DisparityResult:
+    """Left map after all checks (``disparity``) and the raw maps the check compared."""
+
+    def __init__(self, disparity, left, right):
+        self.disparity = disparity
+        self.left = left
+        self.right = right
 
 
 def lr_check(left_disparity, right_disparity, threshold):

@@ -6,6 +6,10 @@ The image is processed in bands of rows (each with the aggregation's halo) whose
 volume is bounded in size and computed a few rows at a time so that the working set stays
 in cache; bands run in parallel threads (numpy releases the GIL). docs/golden-model.md
 explains the choices; none of them changes a bit of the result.
+
+With ``aggregation="sgm"`` the map is the semi-global pipeline's (:mod:`.sgm`): every
+caller of :func:`disparity_map` (the commands, the co-simulation's reference) gets either
+aggregation from the parameters alone.
 """
 
 import os
@@ -15,22 +19,14 @@ import numpy as np
 
 from .aggregation import aggregate
 from .data import check_same_size
-from .lr_check import invalidate_border, lr_check
+from .lr_check import DisparityResult, invalidate_border, lr_check
 from .matching_cost import cost_dtype, matching_costs
 from ..params import ParameterError
+from . import sgm
 from .transform import transform
 from .wta import RightWTA, evaluate_partitions, partition_disparities, wta_partition
 
 __all__ = ["disparity_map", "DisparityResult"]
-
-
-class DisparityResult:
-    """Left map after all checks (``disparity``) and the raw maps the check compared."""
-
-    def __init__(self, disparity, left, right):
-        self.disparity = disparity
-        self.left = left
-        self.right = right
 
 
 #: Bytes of transformed pixels per image that one cost computation reads: both images'
@@ -122,7 +118,9 @@ def disparity_map(left, right, params, threads=None):
     left, right : (H, W) uint8
         Rectified gray images; the left one is the reference.
     params : StereoParams
-        Configuration; its width/height, when set, must match the images.
+        Configuration; its width/height, when set, must match the images. With
+        ``params.is_sgm`` the semi-global pipeline (:func:`.sgm.disparity_map` with the
+        parameters' penalties) computes the map.
     threads : int, optional
         Worker threads (numpy releases the GIL); default one per core.
 
@@ -138,6 +136,9 @@ def disparity_map(left, right, params, threads=None):
             f"images are {width}x{height} but the configuration is for "
             f"{params.width}x{params.height}")
     params = params.with_size(width, height)
+    if params.is_sgm:
+        return sgm.disparity_map(left, right, params, params.p1, params.p2,
+                                 adapt=params.p2_adapt or None, threads=threads)
     workers = threads or os.cpu_count() or 1
     with ThreadPoolExecutor(max_workers=workers) as pool:
         left_t, right_t = pool.map(lambda image: transform(image, params), (left, right))

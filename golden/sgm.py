@@ -5,8 +5,12 @@ any transform are aggregated along the paths a raster-order stream can compute (
 top-left, top, top-right) with integer penalties P1, P2 (optionally P2 adapted to the
 intensity step along the path), normalised by the previous pixel's minimum, and summed.
 The summed costs S then go through the same WTA and right-referenced map as the box
-pipeline. docs/sgm.md is the exact contract; every function here computes it bit for bit
-with integer numpy arithmetic (no floats anywhere).
+pipeline. docs/semantics.md ("Semi-global aggregation") is the exact contract; every
+function here computes it bit for bit with integer numpy arithmetic (no floats anywhere).
+The rules of the parameters (P1, P2, t) and the widths they imply are defined once, in
+:mod:`npstereo.params`, for this model, the command line and the hardware alike;
+``golden.pipeline.disparity_map`` calls :func:`disparity_map` when
+``StereoParams.aggregation`` is ``"sgm"``.
 
 Array layout: cost volumes are (H, W, D), disparity last, so that the minimum over d and
 the d - 1 / d + 1 neighbours of the recurrence are contiguous operations.
@@ -18,14 +22,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import ParameterError, StereoParams
-from .lr_check import INVALID, lr_check
+from ..params import (SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2, ParameterError,
+                      StereoParams, max_path_penalty, sgm_path_cost_bits, sgm_summed_cost_bits)
+from ..params import check_penalties as check_penalty_values
+from .lr_check import INVALID, DisparityResult, lr_check
 from .matching_cost import matching_costs
-from .pipeline import DisparityResult
 from .transform import transform
 
 __all__ = ["PATHS", "PATH_STEPS", "ROW_PATHS", "DEFAULT_TRANSFORM", "DEFAULT_BLOCK",
-           "DEFAULT_P1", "DEFAULT_P2", "DEFAULT_ADAPT", "SgmWidths", "max_path_penalty",
+           "DEFAULT_P1", "DEFAULT_P2", "DEFAULT_ADAPT", "RECOMMENDED", "SgmWidths",
+           "max_path_penalty",
            "widths", "row_memory_bits", "check_penalties", "cost_volume",
            "path_p2", "path_costs", "aggregate", "winners", "disparity_from_summed",
            "disparity_map"]
@@ -36,14 +42,22 @@ PATHS = ("left", "top-left", "top", "top-right")
 #: (dx, dy) from a pixel p to its predecessor p - r on each path.
 PATH_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
 
-#: The recommended configuration, chosen by measurement (docs/sgm.md, "Choosing the
-#: defaults"): census 7x7, P1 = 24, P2 = 79, adaptive P2 with t = 5. The path cost is then
-#: bitlen(48 + 79) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
+#: The recommended configuration, chosen by measurement (docs/quality.md, "SGM: choosing
+#: the defaults"): census 7x7, P1 = 24, P2 = 79, adaptive P2 with t = 5. The path cost is
+#: then bitlen(48 + 79) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
+#: The penalties are ``StereoParams``' defaults for ``aggregation="sgm"`` (npstereo.params).
 DEFAULT_TRANSFORM = "census"
 DEFAULT_BLOCK = 7
-DEFAULT_P1 = 24
-DEFAULT_P2 = 79
-DEFAULT_ADAPT = 5
+DEFAULT_P1 = SGM_DEFAULT_P1
+DEFAULT_P2 = SGM_DEFAULT_P2
+DEFAULT_ADAPT = SGM_DEFAULT_ADAPT
+
+#: The SGM configurations the paper report, the demo and the peers benchmark show, as
+#: ``StereoParams`` fields (add ``disparities``): the defaults, and census 5x5 with the
+#: penalties best on clean real scenes, the cheapest core (docs/quality.md).
+RECOMMENDED = ({"transform": DEFAULT_TRANSFORM, "block": DEFAULT_BLOCK, "aggregation": "sgm"},
+               {"transform": "census", "block": 5, "aggregation": "sgm", "p1": 16, "p2": 96,
+                "p2_adapt": 4})
 
 #: Paths whose predecessor lies in the previous row: their path costs of a whole row are
 #: kept in block RAM.
@@ -54,15 +68,11 @@ ROW_PATHS = ("top-left", "top", "top-right")
 #: path's loop over x still handles many rows per numpy call.
 _BAND_ELEMENTS = 1 << 22
 
-#: Adaptive P2 works on 8-bit gray steps: g = |I(p) - I(p - r)| <= 255 has at most 8 bits,
-#: so from t = 8 on the shift bitlen(g) - t is never positive: such a t would be a constant
-#: P2 in disguise and is rejected.
-_MAX_ADAPT = 7
-
 
 @dataclass(frozen=True)
 class SgmWidths:
-    """Exact bit widths of every quantity of the SGM aggregation (docs/sgm.md, "Widths").
+    """Exact bit widths of every quantity of the SGM aggregation (docs/semantics.md,
+    "Widths").
 
     Attributes
     ----------
@@ -87,22 +97,11 @@ class SgmWidths:
     summed: int
 
 
-def _is_int(value):
-    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-
-
-def max_path_penalty(max_cost):
-    """Largest P2 allowed for a cost of maximum ``max_cost``.
-
-    The path cost may be at most two bits wider than the matching cost:
-    Cmax + P2 <= 2^(bitlen(Cmax) + 2) - 1. For census 5x5 (Cmax = 24) that is P2 <= 103,
-    which keeps L at 7 bits, the width the block-RAM budget allows at 450 x 375, D = 100.
-    """
-    return (1 << (int(max_cost).bit_length() + 2)) - 1 - int(max_cost)
-
-
 def check_penalties(max_cost, p1, p2, adapt=None, paths=PATHS):
     """Validate SGM parameters; raise :class:`ParameterError` with a one-line message.
+
+    The penalties' rules are :func:`npstereo.params.check_penalties` (one definition for
+    ``StereoParams`` and this model); the path set is this model's own.
 
     Parameters
     ----------
@@ -115,18 +114,7 @@ def check_penalties(max_cost, p1, p2, adapt=None, paths=PATHS):
     paths : sequence of str
         A non-empty subset of :data:`PATHS`, each at most once.
     """
-    if not _is_int(p1) or p1 < 0:
-        raise ParameterError(f"P1 must be an integer >= 0, not {p1!r}")
-    if not _is_int(p2) or p2 < p1:
-        raise ParameterError(f"P2 must be an integer >= P1 ({p1}), not {p2!r}")
-    limit = max_path_penalty(max_cost)
-    if p2 > limit:
-        raise ParameterError(
-            f"P2 must be <= {limit} for a matching cost of at most {max_cost} (path cost "
-            f"at most {int(max_cost).bit_length() + 2} bits), not {p2!r}")
-    if adapt is not None and (not _is_int(adapt) or not 1 <= adapt <= _MAX_ADAPT):
-        raise ParameterError(
-            f"adaptive P2 exponent must be an integer 1 .. {_MAX_ADAPT} (or off), not {adapt!r}")
+    check_penalty_values(max_cost, p1, p2, adapt)
     paths = tuple(paths)
     if not paths or len(set(paths)) != len(paths) or any(p not in PATH_STEPS for p in paths):
         raise ParameterError(
@@ -137,10 +125,10 @@ def widths(max_cost, p1, p2, paths=PATHS):
     """The :class:`SgmWidths` of a configuration (validated by :func:`check_penalties`)."""
     check_penalties(max_cost, p1, p2, paths=paths)
     return SgmWidths(cost=int(max_cost).bit_length(),
-                     path=(max_cost + p2).bit_length(),
+                     path=sgm_path_cost_bits(max_cost, p2),
                      step=int(p2).bit_length(),
                      candidate=(max_cost + 2 * p2).bit_length(),
-                     summed=(len(tuple(paths)) * (max_cost + p2)).bit_length())
+                     summed=sgm_summed_cost_bits(max_cost, p2, len(tuple(paths))))
 
 
 def row_memory_bits(width, disparities, max_cost, p2, paths=PATHS):
@@ -150,7 +138,7 @@ def row_memory_bits(width, disparities, max_cost, p2, paths=PATHS):
     bits; the second number is its W minima m of the same width, for hardware that
     stores them instead of recomputing them.
     """
-    bits = (max_cost + p2).bit_length()
+    bits = sgm_path_cost_bits(max_cost, p2)
     rows = sum(1 for path in paths if path in ROW_PATHS)
     return rows * width * disparities * bits, rows * width * bits
 
@@ -419,9 +407,11 @@ def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=
     left, right : (H, W) uint8
         Rectified gray images; the left one is the reference.
     params : StereoParams
-        transform, block, disparities and lr_threshold are used. ``aggregation`` is
-        ignored (SGM replaces the box) and ``rounds`` does not change the result (ties go
-        to the lowest disparity whatever the partitioning, as in the box pipeline).
+        transform, block, disparities and lr_threshold are used. ``aggregation`` and the
+        parameters' own penalties are not: they are the arguments below, so that tests and
+        sweeps can vary them on any configuration (``golden.pipeline.disparity_map`` passes
+        an SGM configuration's own). ``rounds`` does not change the result (ties go to the
+        lowest disparity whatever the partitioning, as in the box pipeline).
     p1, p2 : int
         Penalties, 0 <= P1 <= P2 <= ``max_path_penalty(params.max_cost)``.
     paths : sequence of str

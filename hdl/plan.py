@@ -46,6 +46,9 @@ def check_buildable(params):
     anything is built so that an oversized request fails at once instead of elaborating
     for minutes.
     """
+    if params.is_sgm:
+        raise ParameterError("aggregation sgm: the hardware has no semi-global aggregation "
+                             "yet; the golden model has it (match, eval, paper, demo)")
     if params.width is None or params.height is None:
         raise ParameterError("the hardware needs the image size: give width and height "
                              "(--width and --height)")

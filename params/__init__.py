@@ -10,9 +10,13 @@ limits in :func:`npstereo.hdl.plan.check_buildable`, image contents in the golde
 loaders and pipeline, file names in the commands.
 """
 
+import numbers
 from dataclasses import dataclass, replace
 
-__all__ = ["TRANSFORMS", "LINE_BUFFERS", "UserError", "ParameterError", "StereoParams"]
+__all__ = ["TRANSFORMS", "LINE_BUFFERS", "SGM", "SGM_PATH_COUNT", "SGM_DEFAULT_P1",
+           "SGM_DEFAULT_P2", "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT", "P2_ADAPT_OFF",
+           "UserError", "ParameterError", "StereoParams", "max_path_penalty",
+           "check_penalties", "sgm_path_cost_bits", "sgm_summed_cost_bits"]
 
 #: Transform names as the command line spells them, in the paper's order.
 TRANSFORMS = ("rank", "census", "ext-rank", "ext-census")
@@ -22,6 +26,24 @@ TRANSFORMS = ("rank", "census", "ext-rank", "ext-census")
 #: (the costs of those rows are computed again, A cost units per disparity); "auto" takes
 #: whichever is cheaper overall for the transform (docs/hardware.md).
 LINE_BUFFERS = ("auto", "costs", "transforms")
+
+#: The ``aggregation`` value that replaces the A x A box by semi-global aggregation along
+#: the four raster-order paths (docs/semantics.md, "Semi-global aggregation").
+SGM = "sgm"
+#: Paths an SGM core sums (left, top-left, top, top-right): what its widths are made for.
+SGM_PATH_COUNT = 4
+#: The recommended SGM penalties, chosen by measurement together with census 7x7
+#: (docs/quality.md, "SGM: choosing the defaults"): P1, P2 and the adaptive-P2 exponent t.
+#: They make the census 7x7 path cost bitlen(48 + 79) = 7 bits, what the block-RAM budget
+#: allows at 450 x 375, D = 100.
+SGM_DEFAULT_P1 = 24
+SGM_DEFAULT_P2 = 79
+SGM_DEFAULT_ADAPT = 5
+#: Adaptive P2 works on 8-bit gray steps g <= 255 (at most 8 bits): from t = 8 on the shift
+#: bitlen(g) - t is never positive, so such a t would be a constant P2 in disguise.
+SGM_MAX_ADAPT = 7
+#: ``StereoParams.p2_adapt`` value of a constant P2 (``None`` there means the default t).
+P2_ADAPT_OFF = 0
 
 
 class UserError(Exception):
@@ -45,6 +67,67 @@ def _is_int(value):
     return isinstance(value, int) and not isinstance(value, bool)
 
 
+def _is_integral(value):
+    """An integer of any kind (numpy's included: sweeps compute penalties with numpy), not
+    a ``bool``."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def max_path_penalty(max_cost):
+    """Largest P2 allowed for a matching cost of maximum ``max_cost`` (P2max).
+
+    The path cost may be at most two bits wider than the matching cost:
+    Cmax + P2 <= 2^(bitlen(Cmax) + 2) - 1. For census 5x5 (Cmax = 24) that is P2 <= 103,
+    which keeps the path cost at 7 bits, the width the block-RAM budget allows at
+    450 x 375, D = 100.
+    """
+    return (1 << (int(max_cost).bit_length() + 2)) - 1 - int(max_cost)
+
+
+def check_penalties(max_cost, p1, p2, adapt=None):
+    """Validate SGM penalties; raise :class:`ParameterError` with a one-line message.
+
+    The one definition of the rules, for :class:`StereoParams` and the golden model's
+    whole-image functions (``npstereo.golden.sgm``).
+
+    Parameters
+    ----------
+    max_cost : int
+        Cmax, the largest matching cost of the transform (``StereoParams.max_cost``).
+    p1, p2 : int
+        Penalties: 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax).
+    adapt : int or None
+        Adaptive-P2 threshold exponent t, 1 <= t <= :data:`SGM_MAX_ADAPT`, or None for a
+        constant P2.
+    """
+    if not _is_integral(p1) or p1 < 0:
+        raise ParameterError(f"P1 must be an integer >= 0, not {p1!r}")
+    if not _is_integral(p2) or p2 < p1:
+        raise ParameterError(f"P2 must be an integer >= P1 ({p1}), not {p2!r}")
+    limit = max_path_penalty(max_cost)
+    if p2 > limit:
+        raise ParameterError(
+            f"P2 must be <= {limit} for a matching cost of at most {max_cost} (path cost "
+            f"at most {int(max_cost).bit_length() + 2} bits), not {p2!r}")
+    if adapt is not None and (not _is_integral(adapt) or not 1 <= adapt <= SGM_MAX_ADAPT):
+        raise ParameterError(f"adaptive P2 exponent must be an integer 1 .. {SGM_MAX_ADAPT} "
+                             f"(or off), not {adapt!r}")
+
+
+def sgm_path_cost_bits(max_cost, p2):
+    """Width of a path cost L_r and of its minimum: bitlen(Cmax + P2).
+
+    Every candidate of the recurrence's minimum is >= the predecessor's minimum m and the
+    last one is m + P2, so 0 <= L_r <= Cmax + P2 (docs/semantics.md, "Widths").
+    """
+    return (int(max_cost) + int(p2)).bit_length()
+
+
+def sgm_summed_cost_bits(max_cost, p2, paths=SGM_PATH_COUNT):
+    """Width of the summed cost S over ``paths`` paths: bitlen(paths (Cmax + P2))."""
+    return (paths * (int(max_cost) + int(p2))).bit_length()
+
+
 @dataclass(frozen=True)
 class StereoParams:
     """Configuration of one stereo core and of its golden model.
@@ -59,8 +142,9 @@ class StereoParams:
         Disparity range D (>= 2): disparities 0 .. D-1 are searched.
     rounds : int
         Calculation rounds R; each round evaluates D/R disparities. Must divide D.
-    aggregation : int
-        Cost aggregation window size A (odd, >= 1); the paper uses 3.
+    aggregation : int or str
+        Cost aggregation: an A x A box (A odd, >= 1; the paper uses 3) or :data:`SGM`,
+        semi-global aggregation along four paths (docs/semantics.md).
     lr_threshold : int or None
         Left/right consistency threshold T (>= 0); ``None`` disables the check.
     width, height : int or None
@@ -68,17 +152,30 @@ class StereoParams:
     line_buffer : str
         One of :data:`LINE_BUFFERS`: the hardware's memory for the vertical aggregation.
         It changes resources, never a result.
+    p1, p2 : int or None
+        SGM penalties, 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax). With
+        ``aggregation="sgm"`` a ``None`` becomes :data:`SGM_DEFAULT_P1` /
+        :data:`SGM_DEFAULT_P2`, so the object always holds the values in use; with a box
+        both must be ``None``.
+    p2_adapt : int or None
+        SGM adaptive-P2 threshold exponent t, 1 .. :data:`SGM_MAX_ADAPT`, or
+        :data:`P2_ADAPT_OFF` (0) for a constant P2. With ``aggregation="sgm"`` ``None``
+        becomes :data:`SGM_DEFAULT_ADAPT` (adaptive P2 is on by default); with a box it
+        must be ``None``.
     """
 
     transform: str = "census"
     block: int = 9
     disparities: int = 100
     rounds: int = 1
-    aggregation: int = 3
+    aggregation: int | str = 3
     lr_threshold: int | None = 3
     width: int | None = None
     height: int | None = None
     line_buffer: str = "auto"
+    p1: int | None = None
+    p2: int | None = None
+    p2_adapt: int | None = None
 
     def __post_init__(self):
         if self.transform not in TRANSFORMS:
@@ -94,10 +191,18 @@ class StereoParams:
         if self.disparities % self.rounds != 0:
             raise ParameterError(
                 f"rounds must divide disparities ({self.disparities}), not {self.rounds!r}")
-        if (not _is_int(self.aggregation) or self.aggregation < 1
-                or self.aggregation % 2 == 0):
-            raise ParameterError(
-                f"aggregation size must be an odd integer >= 1, not {self.aggregation!r}")
+        if self.aggregation == SGM:
+            self._resolve_penalties()
+        else:
+            if (not _is_int(self.aggregation) or self.aggregation < 1
+                    or self.aggregation % 2 == 0):
+                raise ParameterError(f"aggregation must be an odd window size >= 1 or "
+                                     f"{SGM!r}, not {self.aggregation!r}")
+            for name in ("p1", "p2", "p2_adapt"):
+                if getattr(self, name) is not None:
+                    raise ParameterError(
+                        f"{name} is an SGM parameter: it needs aggregation {SGM!r}, not a "
+                        f"{self.aggregation}x{self.aggregation} box")
         if self.lr_threshold is not None and (
                 not _is_int(self.lr_threshold) or self.lr_threshold < 0):
             raise ParameterError(
@@ -115,6 +220,28 @@ class StereoParams:
             raise ParameterError(f"line buffer must be one of {', '.join(LINE_BUFFERS)}, "
                                  f"not {self.line_buffer!r}")
 
+    def _resolve_penalties(self):
+        """Validate the SGM penalties and store the defaults in place of ``None``."""
+        p1 = SGM_DEFAULT_P1 if self.p1 is None else self.p1
+        p2 = SGM_DEFAULT_P2 if self.p2 is None else self.p2
+        adapt = SGM_DEFAULT_ADAPT if self.p2_adapt is None else self.p2_adapt
+        try:
+            check_penalties(self.max_cost, p1, p2)
+        except ParameterError as error:
+            # A P2 error (P1 itself is fine) may be about a default the user never typed:
+            # say where the number came from.
+            p1_fine = _is_integral(p1) and p1 >= 0
+            if p1_fine and (self.p1 is None or self.p2 is None):
+                raise ParameterError(f"{error} (SGM defaults P1 = {SGM_DEFAULT_P1}, "
+                                     f"P2 = {SGM_DEFAULT_P2})") from None
+            raise
+        off = _is_integral(adapt) and adapt == P2_ADAPT_OFF
+        check_penalties(self.max_cost, p1, p2, None if off else adapt)
+        # Frozen: the resolved values are set once, here. Plain ints, so that repr() (the
+        # report cache's key) and JSON do not depend on how a caller spelled the number.
+        for name, value in (("p1", p1), ("p2", p2), ("p2_adapt", adapt)):
+            object.__setattr__(self, name, int(value))
+
     def with_size(self, width, height):
         """The same configuration for a ``width`` x ``height`` frame (validated)."""
         return replace(self, width=width, height=height)
@@ -131,9 +258,14 @@ class StereoParams:
         return (self.block - 1) // 2
 
     @property
+    def is_sgm(self):
+        """Semi-global aggregation instead of the A x A box."""
+        return self.aggregation == SGM
+
+    @property
     def agg_radius(self):
-        """Aggregation window radius a = (A-1)/2."""
-        return (self.aggregation - 1) // 2
+        """Aggregation window radius a = (A-1)/2; 0 for SGM (no window)."""
+        return 0 if self.is_sgm else (self.aggregation - 1) // 2
 
     @property
     def neighbours(self):
@@ -151,6 +283,7 @@ class StereoParams:
 
         ``D - 1 + max(1, a)``: x >= D as in the paper for A <= 3, and for wider aggregation
         windows also every right-image pixel the aggregation touches lies inside the image.
+        SGM has no window (a = 0): x >= D.
         """
         return self.disparities - 1 + max(1, self.agg_radius)
 
@@ -194,7 +327,20 @@ class StereoParams:
 
     @property
     def aggregated_cost_bits(self):
+        """Width of the aggregated cost S that the winner-takes-all compares.
+
+        Box: bitlen(A^2 Cmax). SGM: the sum of the four path costs,
+        bitlen(4 (Cmax + P2)).
+        """
+        if self.is_sgm:
+            return sgm_summed_cost_bits(self.max_cost, self.p2)
         return (self.max_cost * self.aggregation * self.aggregation).bit_length()
+
+    @property
+    def path_cost_bits(self):
+        """SGM: width of one path cost L_r(p, d) and of its minimum, bitlen(Cmax + P2);
+        ``None`` for a box."""
+        return sgm_path_cost_bits(self.max_cost, self.p2) if self.is_sgm else None
 
     @property
     def disparity_bits(self):
@@ -206,4 +352,11 @@ class StereoParams:
         size = "" if self.width is None else f" {self.width}x{self.height}"
         buffer = "" if self.line_buffer == "auto" else f" LB={self.line_buffer}"
         return (f"{self.transform} {self.block}x{self.block} D={self.disparities} "
-                f"R={self.rounds} A={self.aggregation} LR={lr}{size}{buffer}")
+                f"R={self.rounds} {self.describe_aggregation()} LR={lr}{size}{buffer}")
+
+    def describe_aggregation(self):
+        """The aggregation alone: ``A=3``, or ``SGM P1=24 P2=79 t=5`` (``t=off``)."""
+        if not self.is_sgm:
+            return f"A={self.aggregation}"
+        adapt = "off" if self.p2_adapt == P2_ADAPT_OFF else str(self.p2_adapt)
+        return f"SGM P1={self.p1} P2={self.p2} t={adapt}"

@@ -1,6 +1,8 @@
 """Shared fixtures: small seeded synthetic stereo pairs (no external data in tests)."""
 
+import numpy as np
 import pytest
+from PIL import Image
 
 from npstereo.golden.synthetic import synthetic_pair
 
@@ -15,3 +17,17 @@ def small_pair():
 def default_pair():
     """The embedded default scene of ``make demo`` (160 x 120, D = 32, seed 0)."""
     return synthetic_pair()
+
+
+@pytest.fixture
+def pair_files(tmp_path, small_pair):
+    """The small synthetic pair as RGB PNGs and a Middlebury-2003 folder."""
+    left, right = tmp_path / "left.png", tmp_path / "right.png"
+    Image.fromarray(small_pair.left).save(left)
+    Image.fromarray(small_pair.right).save(right)
+    scene = tmp_path / "scene"
+    scene.mkdir()
+    Image.fromarray(small_pair.left).save(scene / "im2.png")
+    Image.fromarray(small_pair.right).save(scene / "im6.png")
+    Image.fromarray((4 * small_pair.ground_truth).astype(np.uint8)).save(scene / "disp2.pgm")
+    return left, right, scene

@@ -10,24 +10,12 @@ from PIL import Image
 
 from npstereo.gen.cli import main
 from npstereo.params import StereoParams
+from npstereo.golden import sgm
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
+from npstereo.golden.synthetic import synthetic_pair
 
 D = 16
-
-
-@pytest.fixture
-def pair_files(tmp_path, small_pair):
-    """The small synthetic pair as RGB PNGs and a Middlebury-2003 folder."""
-    left, right = tmp_path / "left.png", tmp_path / "right.png"
-    Image.fromarray(small_pair.left).save(left)
-    Image.fromarray(small_pair.right).save(right)
-    scene = tmp_path / "scene"
-    scene.mkdir()
-    Image.fromarray(small_pair.left).save(scene / "im2.png")
-    Image.fromarray(small_pair.right).save(scene / "im6.png")
-    Image.fromarray((4 * small_pair.ground_truth).astype(np.uint8)).save(scene / "disp2.pgm")
-    return left, right, scene
 
 
 def files_under(path):
@@ -198,7 +186,23 @@ def test_paper_on_the_synthetic_scene(capsys, tmp_path):
     assert len(results["results"]) == 4 * 4
     clean = [r for r in results["results"] if r["condition"] == "clean"]
     assert all(r["correct"] > 50 for r in clean)
-    assert "| census |" in (out / "README.md").read_text()
+    readme = (out / "README.md").read_text()
+    assert "| census |" in readme
+    # The SGM rows are measured: the default and census 5x5 under all four conditions,
+    # the clean ones equal to the golden SGM map scored here.
+    assert [(r["condition"], r["block"]) for r in results["sgm"]][:4] == [
+        ("clean", 7), ("clean", 5), ("noise 0.002", 7), ("noise 0.002", 5)]
+    assert len(results["sgm"]) == 2 * 4
+    pair = synthetic_pair(disparities=D)
+    for row in results["sgm"][:2]:
+        params = StereoParams("census", row["block"], D)
+        map_ = sgm.disparity_map(*pair.gray(), params, row["p1"], row["p2"],
+                                 adapt=row["p2_adapt"] or None).disparity
+        expected = evaluate(map_, pair.ground_truth, D)
+        assert row["correct"] == pytest.approx(expected.correct)
+        assert f"| {row['configuration']} | {expected.correct:.2f} |" in readme
+    assert (row["p1"], row["p2"], row["p2_adapt"]) == (16, 96, 4)
+    assert results["sgm"][0]["configuration"] == "census 7x7, SGM P1=24 P2=79 t=5 (default)"
 
 
 def test_paper_and_demo_bad_inputs(capsys, tmp_path):
@@ -220,17 +224,31 @@ def test_paper_and_demo_bad_inputs(capsys, tmp_path):
         assert_user_error(capsys, tmp_path, argv, word)
 
 
-def test_demo_writes_maps_and_summary(capsys, tmp_path):
+def test_demo_writes_maps_and_summary(capsys, tmp_path, default_pair):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--block", "7", "--no-hardware"]) == 0
     summary = json.loads((out / "golden.json").read_text())
-    assert [r["transform"] for r in summary["results"]] == [
-        "rank", "census", "ext-rank", "ext-census"]
+    assert [(r["name"], r["transform"], r["block"]) for r in summary["results"]] == [
+        ("rank", "rank", 7), ("census", "census", 7), ("ext-rank", "ext-rank", 7),
+        ("ext-census", "ext-census", 7), ("sgm", "census", 7)]
     assert all(r["correct"] > 70 for r in summary["results"])
-    for name in ("left", "right", "ground_truth", "rank", "census", "ext-rank", "ext-census"):
+    for name in ("left", "right", "ground_truth", "rank", "census", "ext-rank", "ext-census",
+                 "sgm"):
         assert (out / f"{name}.png").stat().st_size > 0
-    assert "census" in capsys.readouterr().out
-    assert "| ext-census |" in (out / "summary.md").read_text()
+    printed = capsys.readouterr().out
+    assert "census" in printed
+    text = (out / "summary.md").read_text()
+    assert "| ext-census 7x7 | A=3 |" in text
+    # The SGM row is the golden SGM map with the defaults, measured.
+    row = summary["results"][-1]
+    params = StereoParams("census", 7, 32)
+    expected = evaluate(sgm.disparity_map(*default_pair.gray(), params, sgm.DEFAULT_P1,
+                                          sgm.DEFAULT_P2, adapt=sgm.DEFAULT_ADAPT).disparity,
+                        default_pair.ground_truth, 32)
+    assert row["correct"] == pytest.approx(expected.correct)
+    assert row["aggregation"] == "SGM P1=24 P2=79 t=5"
+    assert f"| census 7x7 | SGM P1=24 P2=79 t=5 | {expected.correct:.2f} |" in text
+    assert f"census 7x7 SGM P1=24 P2=79 t=5     correct {expected.correct:6.2f}%" in printed
 
 
 def test_eval_in_parallel_processes_gives_the_same_numbers(capsys, tmp_path, pair_files):

@@ -1,6 +1,7 @@
 """The golden SGM aggregation (golden/sgm.py) against a plain per-pixel reference.
 
-The reference below is written straight from docs/sgm.md with Python loops over pixels and
+The reference below is written straight from docs/semantics.md ("Semi-global aggregation")
+with Python loops over pixels and
 disparities on Python integers (no numpy arithmetic, no shifts: divisions by powers of two,
 a brute-force bit length); it shares no code with golden/sgm.py. The matching costs come from
 tests/reference.py, the box pipeline's independent reference, with the SGM rule for
@@ -16,7 +17,7 @@ import itertools
 import numpy as np
 import pytest
 
-from npstereo.golden import sgm
+from npstereo.golden import pipeline, sgm
 from npstereo.params import TRANSFORMS, ParameterError, StereoParams
 
 import reference
@@ -487,6 +488,71 @@ def test_broken_tie_rule_is_caught():
     left, _ = sgm.winners(summed)
     highest = summed.shape[2] - 1 - np.argmin(summed[..., ::-1], axis=2)
     assert left.tolist() == [[0, 0, 0]] and not np.array_equal(left, highest)
+
+
+# Through the pipeline: StereoParams(aggregation="sgm") -----------------------------------------
+
+#: The golden SGM function as the pipeline must call it (kept before any monkeypatch).
+DIRECT = sgm.disparity_map
+
+#: SGM configurations as StereoParams fields: explicit penalties, adaptive P2 off (0), no
+#: check, several rounds, the defaults (24/79/t=5, resolved by StereoParams), ext. census.
+PIPELINE_CASES = [
+    dict(transform="census", block=3, disparities=6, lr_threshold=1, p1=2, p2=9, p2_adapt=3),
+    dict(transform="rank", block=5, disparities=5, lr_threshold=None, p1=1, p2=4, p2_adapt=0),
+    dict(transform="census", block=5, disparities=8, rounds=4, lr_threshold=3),
+    dict(transform="ext-census", block=3, disparities=4, lr_threshold=0, p1=300, p2=1500,
+         p2_adapt=2),
+]
+
+
+def pipeline_matches(fields, left, right):
+    """golden.pipeline.disparity_map of the SGM configuration ``fields`` equals the golden
+    SGM called directly with its penalties (all three maps) and the plain reference."""
+    params = StereoParams(aggregation="sgm", **fields)
+    got = pipeline.disparity_map(left, right, params)
+    adapt = params.p2_adapt or None
+    direct = DIRECT(left, right, params, params.p1, params.p2, adapt=adapt)
+    expected = ref_map(left, right, params.transform, params.block, params.disparities,
+                       params.p1, params.p2, sgm.PATHS, adapt, params.lr_threshold)
+    return (np.array_equal(got.disparity, direct.disparity)
+            and np.array_equal(got.left, direct.left) and np.array_equal(got.right, direct.right)
+            and got.disparity.dtype == direct.disparity.dtype
+            and np.array_equal(got.disparity, expected))
+
+
+@pytest.mark.parametrize("fields", PIPELINE_CASES, ids=lambda f: f"{f['transform']}{f['block']}")
+def test_pipeline_computes_sgm_from_the_parameters(fields):
+    left, right = make_pair("ramp", 7, 18, fields["block"])
+    assert pipeline_matches(fields, left, right)
+
+
+def test_pipeline_sgm_differs_from_the_box():
+    # Counterpart: the same transform with the box gives another map, so the equality above
+    # is not the box pipeline agreeing with itself.
+    left, right = make_pair("ramp", 7, 18, 3)
+    fields = dict(PIPELINE_CASES[0])
+    box = StereoParams(transform="census", block=3, disparities=6, lr_threshold=1)
+    sgm_map = pipeline.disparity_map(left, right, StereoParams(aggregation="sgm", **fields))
+    assert not np.array_equal(sgm_map.disparity, pipeline.disparity_map(left, right, box).disparity)
+
+
+@pytest.mark.parametrize("broken, case", [("adapt dropped", 0), ("golden defaults", 1),
+                                          ("no check", 0)])
+def test_broken_pipeline_dispatch_is_caught(monkeypatch, broken, case):
+    """A pipeline that loses one of the configuration's SGM values fails the comparison."""
+    def dispatch(left, right, params, p1, p2, paths=sgm.PATHS, adapt=None, threads=None):
+        if broken == "adapt dropped":
+            adapt = None
+        elif broken == "golden defaults":
+            p1, p2 = sgm.DEFAULT_P1, sgm.DEFAULT_P2
+        else:
+            params = params.replace(lr_threshold=None)
+        return DIRECT(left, right, params, p1, p2, paths, adapt, threads)
+    monkeypatch.setattr(sgm, "disparity_map", dispatch)
+    fields = PIPELINE_CASES[case]
+    left, right = make_pair("ramp", 7, 18, fields["block"])
+    assert not pipeline_matches(fields, left, right)
 
 
 # Parameters ----------------------------------------------------------------------------------
