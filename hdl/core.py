@@ -175,7 +175,9 @@ class NpStereoCore(wiring.Component):
         # loop of one clock, so every comparison it needs is a flag registered beside its
         # counter: the decision is then a few LUTs deep (13 ns on ECP5 with the
         # comparisons inside the loop).
-        state = Signal(range(4), name="framing_state")
+        # One hot: each state's flag is a register of its own, so the proposal's LUTs take
+        # one input per state they test instead of decoding two bits.
+        state = Signal(4, name="framing_state", init=1 << IDLE)
         column = Signal(range(width))             # column of the next admitted position
         row = Signal(range(max(2, height)))
         line_start = Signal(init=1, name="column_zero")          # column == 0
@@ -184,7 +186,7 @@ class NpStereoCore(wiring.Component):
         end_of_frame = end_of_line & last_row
         none_outstanding = Signal(init=1, name="none_outstanding")
         m.d.sync += none_outstanding.eq(outstanding == 0)  # a clock late: a flush ends late
-        idle, framing, filling = (state == n for n in (IDLE, FRAME, FILL))
+        idle, framing, filling = state[IDLE], state[FRAME], state[FILL]
 
         # The proposal for the next slot, from registers only. With R >= 2 it is made in
         # round R-2 and registered, and applied in round R-1: nothing it depends on can
@@ -223,18 +225,19 @@ class NpStereoCore(wiring.Component):
         proposal = data.StructLayout({
             **{name: 1 for name in ("admit", "take", "start", "overlap", "pop", "error",
                                     "change")},
-            "state": range(4)})
+            "state": 4})
         proposed = Signal(proposal)
 
         def to(new_state):
-            return [proposed.change.eq(1), proposed.state.eq(new_state)]
+            return [proposed.change.eq(1), proposed.state.eq(1 << new_state)]
 
         def start_frame(overlapping):
             # A line of one pixel cannot end on the first pixel: width > 2 always.
             return [proposed.admit.eq(1), proposed.take.eq(1), proposed.start.eq(1),
                     proposed.overlap.eq(overlapping), proposed.pop.eq(1),
                     proposed.error.eq(given.last_beat),
-                    *to(Mux(given.last_beat, FILL, FRAME))]
+                    proposed.change.eq(1),
+                    proposed.state.eq(Mux(given.last_beat, 1 << FILL, 1 << FRAME))]
 
         with m.If(idle):
             with m.If(given.drop):
@@ -269,8 +272,10 @@ class NpStereoCore(wiring.Component):
         if rounds == 1:
             m.d.comb += chosen.eq(proposed)
         else:
+            # Loaded in round R-2 (a clock enable, no logic) and used only in round R-1.
             latched = Signal(proposal, name="proposal")
-            m.d.sync += latched.eq(Mux(slots.first(rounds - 2), proposed, 0))
+            with m.If(slots.first(rounds - 2)):
+                m.d.sync += latched.eq(proposed)
             m.d.comb += chosen.eq(Mux(slots.first(rounds - 1), latched, 0))
         take = chosen.take        # the admitted position is the head pixel (else zeros)
         start, overlap = chosen.start, chosen.overlap

@@ -160,18 +160,27 @@ class LRCheck(wiring.Component):
             ok = Signal(name=f"candidate_ok{i}")
             m.d.sync += ok.eq(in_frame & (x_minus_base >= i))
             ok = pipe(m, ok, stage_b - 3, f"candidate_ok{i}", reset=True)
-            cost = pipe(m, self.sums[i], stage_b, f"candidate_cost{i}")
+            early_cost = pipe(m, self.sums[i], stage_a, f"candidate_cost{i}")
+            cost = pipe(m, early_cost, 1, f"candidate_cost{i}_b")
             if rounds > 1:
+                # The comparison is made in stage A, on the word as it is read, and
+                # registered with it: in stage B only the choice remains in front of the
+                # store's write (a comparison there was the critical path of rank 7x7).
+                # The word's last write landed R-1 >= 1 clocks before this read.
                 held = Signal(entry, name=f"held{i}", reset_less=True)
-                m.d.sync += held.eq(store.read(round_a))
+                lower = Signal(name=f"candidate_lower{i}")
+                m.d.sync += [held.eq(store.read(round_a)),
+                             lower.eq(better(early_cost, store.read(round_a).cost))]
                 fresh = slots.first(stage_b)
             else:
+                # With R = 1 the word is written in every clock: it is compared in stage B.
                 held = store.read(0)
+                lower = better(cost, held.cost)
             if i == 0 and rounds == 1:
                 wins = ok            # every right pixel's first candidate: always fresh
             else:
                 empty = held.empty | fresh if i == 0 else held.empty
-                wins = ok & (empty | better(cost, held.cost))
+                wins = ok & (empty | lower)
             updated = Signal(entry, name=f"updated{i}")
             m.d.comb += updated.eq(Mux(wins, Cat(cost, first_disparity + i, Const(0, 1)),
                                        held))
