@@ -164,7 +164,7 @@ class Aggregation(wiring.Component):
         sums = []
         for i, value in enumerate(values):
             taps = Store(m, f"row_taps{i}", unsigned(2 * a * bits), rounds)
-            round_ = slots.round(offset)
+            round_ = slots.phased_round(offset, i, f"row_taps{i}_address")
             word = taps.read(round_)
             older = [word[k * bits:(k + 1) * bits] for k in range(2 * a)]
             taps.write(round_, Cat(value, *older[:2 * a - 1]), tag.valid)

@@ -142,6 +142,24 @@ class SlotClock:
             self._rounds[offset] = counter
         return self._rounds[offset]
 
+    def phased_round(self, offset, phase, name):
+        """(round + phase) mod R ``offset`` clocks after the input offset: a counter of
+        its own.
+
+        The address of one of many small stores: a round counter shared by all of them
+        fans out to every RAM cell (rank 7x7: 6.3 ns of routing on ECP5). Each store
+        addresses its word j at (j + phase) mod R, which is as good as j for a store read
+        and written at the same round; distinct phases keep synthesis from merging the
+        counters back into one.
+        """
+        if self.rounds == 1:
+            return Const(0)
+        counter = Signal(range(self.rounds), name=name)
+        following = Mux(counter == self.rounds - 1, 0, counter + 1)
+        self.m.d.sync += counter.eq(Mux(self.first(offset - 1), phase % self.rounds,
+                                        following))
+        return counter
+
     def delay(self, value, start, steps, name, reset_less=False):
         """A value slot-aligned at ``start`` moved ``steps`` clocks later.
 

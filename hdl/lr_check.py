@@ -149,7 +149,6 @@ class LRCheck(wiring.Component):
         m.d.sync += [x_minus_base.eq(tag.x - round_base(m, slots, 1, units)),
                      in_frame.eq(tag.valid & self._in_frame(tag))]
         stage_a, stage_b = LR_STAGE_A, LR_STAGE_A + 1
-        round_a, round_b = slots.round(stage_a), slots.round(stage_b)
         first_disparity = pipe(m, round_base(m, slots, 1, units), stage_b - 1,
                                "lr_first_disparity")
         writing = slots.delay(tag.valid, 1, stage_b - 1, "lr_writing")
@@ -169,8 +168,9 @@ class LRCheck(wiring.Component):
                 # The word's last write landed R-1 >= 1 clocks before this read.
                 held = Signal(entry, name=f"held{i}", reset_less=True)
                 lower = Signal(name=f"candidate_lower{i}")
-                m.d.sync += [held.eq(store.read(round_a)),
-                             lower.eq(better(early_cost, store.read(round_a).cost))]
+                read_address = slots.phased_round(stage_a, i, f"right_winners{i}_read")
+                m.d.sync += [held.eq(store.read(read_address)),
+                             lower.eq(better(early_cost, store.read(read_address).cost))]
                 fresh = slots.first(stage_b)
             else:
                 # With R = 1 the word is written in every clock: it is compared in stage B.
@@ -185,13 +185,16 @@ class LRCheck(wiring.Component):
             m.d.comb += updated.eq(Mux(wins, Cat(cost, first_disparity + i, Const(0, 1)),
                                        held))
             updated_words.append(updated)
+        # Store i keeps word j at (j + i) mod R, each with address counters of its own
+        # (see SlotClock.phased_round).
         for i, store in enumerate(stores):
             if i:
-                store.write(round_b, updated_words[i - 1], writing)
+                store.write(slots.phased_round(stage_b, i, f"right_winners{i}_write"),
+                            updated_words[i - 1], writing)
             elif rounds > 1:
                 # The last unit's word j becomes unit 0's word j + 1 (none after R-1).
-                store.write(Mux(round_b == rounds - 1, 0, round_b + 1), updated_words[-1],
-                            writing & ~last)
+                store.write(slots.phased_round(stage_b, 1, "right_winners0_write"),
+                            updated_words[-1], writing & ~last)
         leaving = Signal(name="right_final_valid")
         final = Signal(d_bits, name="right_final", reset_less=True)
         m.d.sync += leaving.eq(writing & last)
