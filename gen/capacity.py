@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from ..params import UserError
 
-__all__ = ["Resource", "Device", "DEVICES", "device", "utilisation", "fit_message",
+__all__ = ["Resource", "Device", "DEVICES", "device", "usage", "utilisation", "fit_message",
            "ECP5_85K", "ecp5_utilisation"]
 
 _ECP5_SHEET = "Lattice FPGA-DS-02012 (ECP5 and ECP5-5G Family Data Sheet), Table 1.1"
@@ -148,7 +148,7 @@ def device(name):
         raise UserError(f"device must be one of {', '.join(DEVICES)}, not {name!r}") from None
 
 
-def _used(result, dev):
+def usage(result, dev):
     """What a synthesis result of ``dev``'s target takes of each of its resources."""
     if dev.target == "ecp5":
         return {"LUT": result["logic"] + _LUTS_PER_DPR16X4 * result.get("lut_rams", 0),
@@ -174,7 +174,7 @@ def utilisation(result, dev):
     dev : Device or str
     """
     dev = device(dev) if isinstance(dev, str) else dev
-    used = _used(result, dev)
+    used = usage(result, dev)
     return {r.name: round(100.0 * used[r.name] / r.capacity, 1) for r in dev.resources}
 
 

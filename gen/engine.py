@@ -36,7 +36,8 @@ from tqdm import tqdm
 from ..params import UserError
 
 __all__ = ["CONNECT_TIMEOUT", "ALLOWED_FAILURES", "RETRIES", "Task", "TaskFailure",
-           "task_key", "cluster", "run_tasks", "add_engine_arguments"]
+           "task_key", "cluster", "run_tasks", "add_engine_arguments",
+           "check_engine_arguments"]
 
 #: Seconds to reach a user's scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT = 5
@@ -79,12 +80,13 @@ def add_engine_arguments(parser, default_workers="one per core"):
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="address of a running Dask scheduler (tcp://host:8786); "
                              "default: an embedded LocalCluster on this machine")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", "--jobs", dest="workers", type=int, default=None,
                         help=f"worker processes of the embedded cluster (default "
-                             f"{default_workers})")
+                             f"{default_workers}; --jobs is the older name)")
 
 
-def _check_workers(workers, scheduler):
+def check_engine_arguments(workers, scheduler):
+    """One-line errors for ``--workers`` and ``--scheduler`` before any work is done."""
     if workers is not None and workers < 1:
         raise UserError(f"--workers must be an integer >= 1, not {workers}")
     if workers is not None and scheduler is not None:
@@ -101,7 +103,7 @@ def cluster(scheduler=None, workers=None):
     Raises a one-line :class:`UserError` when ``scheduler`` does not answer within
     :data:`CONNECT_TIMEOUT` seconds or shows no worker within :data:`WORKER_TIMEOUT`.
     """
-    _check_workers(workers, scheduler)
+    check_engine_arguments(workers, scheduler)
     if scheduler is not None:
         try:
             client = Client(scheduler, timeout=CONNECT_TIMEOUT)
@@ -128,6 +130,20 @@ def cluster(scheduler=None, workers=None):
                              memory_limit=0, silence_logs=logging.CRITICAL)
     with local, Client(local) as client:
         yield client
+
+
+def _executing(dask_worker):
+    """On a worker: the keys of the tasks its threads are executing now."""
+    return [ts.key for ts in dask_worker.state.executing]
+
+
+def _running(client, keys):
+    """How many of ``keys`` are executing on a worker (not merely queued there)."""
+    try:
+        answers = client.run(_executing, on_error="ignore")
+    except (OSError, TimeoutError):  # a worker going away while asked
+        return 0
+    return sum(key in keys for executing in answers.values() for key in executing)
 
 
 def _describe(error):
@@ -176,7 +192,6 @@ def run_tasks(client, tasks, desc, on_result=None):
                 if on_result is not None:
                     on_result(task, result, lambda line: bar.write(line, file=sys.stderr))
                 bar.update()
-            running = sum(key in keys for ks in client.processing().values() for key in ks
-                          ) if pending else 0
+            running = _running(client, keys) if pending else 0
             bar.set_postfix_str(f"running {running}, failed {failed}")
     return results

@@ -166,7 +166,7 @@ def test_failed_cell_keeps_the_sweep_going(monkeypatch):
         raise RuntimeError("elaboration blew up")
     monkeypatch.setattr(cmd_report, "evaluate", explode)
     params = paper_configurations()[0]
-    report = cmd_report._job(params, ("cyclonev",), False, 150.0, None, None, None)
+    report = cmd_report.synthesis_job(params, ("cyclonev",), False, 150.0, None, None, None)
     assert report["results"]["cyclonev"]["status"] == "failed"
     assert "blew up" in report["results"]["cyclonev"]["message"]
     text = sweep_markdown([report])
@@ -185,7 +185,8 @@ def test_paper_sweep_configurations():
 @pytest.mark.parametrize("argv, message", [
     (["--transform", "census", "--block", "3"], "--width and --height are required"),
     (["--width", "32", "--height", "8", "--block", "4"], "block size"),
-    (["--width", "32", "--height", "8", "--jobs", "0"], "--jobs"),
+    (["--paper", "--jobs", "0"], "--workers must be an integer >= 1"),
+    (["--width", "32", "--height", "8", "--workers", "2"], "--scheduler and --workers are for --paper"),
     (["--width", "32", "--height", "8", "--pnr"], "--pnr"),
     (["--width", "32", "--height", "8", "--target", "vivado"], "invalid choice"),
     (["--paper", "--width", "32"], "--paper"),
