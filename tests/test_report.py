@@ -17,7 +17,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 from PIL import Image
 
-from npstereo.gen import cmd_report, report_cache
+from npstereo.gen import cmd_report, engine, report_cache
 from npstereo.gen.cli import main
 from npstereo.gen.paper_resources import paper_configurations
 from npstereo.gen.plots import sweep_plots
@@ -276,3 +276,31 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     sweep.write_text(json.dumps(document))
     assert report_cache.seed_cache(sweep, tmp_path / "other") == 1
 
+
+
+#: Figures of a synthesis result that must not depend on where it ran.
+FIGURES = ("status", "logic", "registers", "block_rams", "lut_rams", "memory_bits",
+           "ffram_bits", "memories", "logic_levels", "message")
+
+
+def test_sweep_on_dask_gives_the_numbers_of_one_process(tmp_path):
+    """``report --paper``'s engine: configurations as tasks on a LocalCluster of two worker
+    processes give the figures that evaluate() gives in this process, in the order of the
+    configurations; run again on the cache, nothing is submitted (no client at all)."""
+    configurations = [MEMORY_SHAPES[2], MEMORY_SHAPES[1]]
+    cache = tmp_path / "cache"
+    with engine.cluster(workers=2) as client:
+        swept = cmd_report.run_sweep(configurations, ("cyclonev",), False, 150.0, None, cache,
+                                     client)
+    assert [r["params"] for r in swept] == [dataclasses.asdict(p) for p in configurations]
+    for params, report in zip(configurations, swept):
+        direct = cmd_report.evaluate(params, ["cyclonev"])["results"]["cyclonev"]
+        result = report["results"]["cyclonev"]
+        assert result["status"] == "ok" and result["cached"] is False
+        assert {k: result.get(k) for k in FIGURES} == {k: direct.get(k) for k in FIGURES}
+        assert result["memory_bits"] == plan.memory_bits(params)
+    again = cmd_report.run_sweep(configurations, ("cyclonev",), False, 150.0, None, cache,
+                                 client=None)
+    assert all(r["results"]["cyclonev"]["cached"] for r in again)
+    assert [{k: r["results"]["cyclonev"].get(k) for k in FIGURES} for r in again] == \
+        [{k: r["results"]["cyclonev"].get(k) for k in FIGURES} for r in swept]
