@@ -18,8 +18,7 @@ from dataclasses import dataclass
 
 from ..params import UserError
 
-__all__ = ["Resource", "Device", "DEVICES", "device", "usage", "utilisation", "fit_message",
-           "ECP5_85K", "ecp5_utilisation"]
+__all__ = ["Resource", "Device", "DEVICES", "device", "usage", "utilisation", "fit_message"]
 
 _ECP5_SHEET = "Lattice FPGA-DS-02012 (ECP5 and ECP5-5G Family Data Sheet), Table 1.1"
 _NEXTPNR = ("nextpnr-ecp5 device database ('Device utilisation' report of "
@@ -135,10 +134,6 @@ DEVICES = {d.name: d for d in (
 #: RAM and slice 2 for its write port (ECP5 data sheet, section 2.2.1).
 _LUTS_PER_DPR16X4 = 6
 
-#: The LFE5U-85F's resources by cell name (the part ``nextpnr-ecp5 --85k`` places on).
-ECP5_85K = {"LUT4": 83640, "FF": 83640, "DP16KD": 208, "MULT18X18D": 156,
-            "TRELLIS_DPR16X4": 10455}
-
 
 def device(name):
     """The :class:`Device` called ``name``, or a one-line UserError naming the choices."""
@@ -176,12 +171,6 @@ def utilisation(result, dev):
     dev = device(dev) if isinstance(dev, str) else dev
     used = usage(result, dev)
     return {r.name: round(100.0 * used[r.name] / r.capacity, 1) for r in dev.resources}
-
-
-def ecp5_utilisation(result):
-    """Utilisation (percent) of the LFE5U-85F by an ``ecp5`` synthesis result: ``LUT``
-    (logic plus the LUT sites of LUT RAMs), ``FF``, ``DP16KD``, ``DSP``, ``LUTRAM``."""
-    return utilisation(result, DEVICES["ecp5-85k"])
 
 
 def fit_message(utilisation):

@@ -14,7 +14,12 @@ with no other change. What Dask gives and the commands rely on:
 - a task that raises is tried again :data:`RETRIES` times (``retries=`` of
   ``Client.submit``) before it counts as failed;
 - tasks carry deterministic keys, so the same evaluation submitted twice (two clients of
-  one cluster) is computed once.
+  one cluster) is computed once;
+- a run is submitted as one graph whose tasks carry their priority as an annotation: the
+  scheduler then starts them in the caller's order (submitted one by one, the first few of
+  each kind would go straight to the workers and run ahead of the rest);
+- data many tasks need (a scene's images) is one task of the graph (:func:`shared`),
+  sent once, and computed again from the graph if the worker holding it dies.
 
 Results are cached by the callers in a file cache that the workers share
 (:mod:`.report_cache`): a task that finds its result there returns it at once, and the
@@ -36,7 +41,7 @@ from tqdm import tqdm
 from ..params import UserError
 
 __all__ = ["CONNECT_TIMEOUT", "ALLOWED_FAILURES", "RETRIES", "Task", "TaskFailure",
-           "task_key", "cluster", "run_tasks", "add_engine_arguments",
+           "task_key", "shared", "cluster", "run_tasks", "add_engine_arguments",
            "check_engine_arguments"]
 
 #: Seconds to reach a user's scheduler before giving up with a one-line error.
@@ -47,6 +52,8 @@ WORKER_TIMEOUT = 10
 ALLOWED_FAILURES = 3
 #: Retries of a task that raised.
 RETRIES = 2
+#: Priority of the values tasks share (:func:`shared`), above any task's.
+_FIRST = 2**31
 #: Seconds between refreshes of the progress bar's running count.
 _POLL = 1.0
 
@@ -54,7 +61,8 @@ _POLL = 1.0
 @dataclass(frozen=True)
 class Task:
     """One evaluation: ``function(*args)`` under the Dask key ``key``; ``label`` names it
-    in progress lines."""
+    in progress lines. An argument made by :func:`shared` reaches ``function`` as the
+    value it holds."""
 
     key: str
     function: object
@@ -73,6 +81,17 @@ def task_key(kind, *parts):
     """A deterministic Dask key: ``kind`` and a digest of ``parts`` (JSON-able)."""
     text = json.dumps(parts, sort_keys=True, default=repr)
     return f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:20]}"
+
+
+def shared(value, key):
+    """``value`` as one task of a run's graph under ``key``, for :class:`Task` arguments:
+    tasks that all take it then share one copy instead of carrying one each.
+
+    It is given the highest priority, so that the tasks waiting for it are not held back
+    behind the rest of the run.
+    """
+    with dask.annotate(priority=_FIRST):
+        return dask.delayed(value, name=key, pure=True)
 
 
 def add_engine_arguments(parser, default_workers="one per core"):
@@ -127,7 +146,11 @@ def cluster(scheduler=None, workers=None):
                              host="127.0.0.1", dashboard_address=None,
                              # The tools' memory is in their own processes; a limit on
                              # the worker would only restart it in the middle of a run.
-                             memory_limit=0, silence_logs=logging.CRITICAL)
+                             memory_limit=0, silence_logs=logging.CRITICAL,
+                             # The scheduler's HTTP routes (health, metrics) listen even
+                             # without a dashboard, by default on 8787: a port of their
+                             # own keeps two runs from colliding (and warning about it).
+                             scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     with local, Client(local) as client:
         yield client
 
@@ -168,9 +191,11 @@ def run_tasks(client, tasks, desc, on_result=None):
     results = {}
     if not tasks:
         return results
-    futures = {client.submit(t.function, *t.args, key=t.key, retries=RETRIES,
-                             priority=len(tasks) - i): t
-               for i, t in enumerate(tasks)}
+    graph = []
+    for i, t in enumerate(tasks):
+        with dask.annotate(priority=len(tasks) - i):
+            graph.append(dask.delayed(t.function, pure=True)(*t.args, dask_key_name=t.key))
+    futures = dict(zip(client.compute(graph, retries=RETRIES), tasks))
     keys = {t.key for t in tasks}
     failed = 0
     with tqdm(total=len(tasks), desc=desc, unit="task", file=sys.stderr) as bar:
@@ -185,13 +210,18 @@ def run_tasks(client, tasks, desc, on_result=None):
                 if future.status == "finished":
                     result = future.result()
                 else:
-                    result = TaskFailure(_describe(future.exception()))
+                    # "error" carries the exception; "cancelled" (the scheduler lost
+                    # the client or the task) carries none.
+                    error = future.exception() if future.status == "error" else None
+                    result = TaskFailure(_describe(error) if error is not None
+                                         else f"task {future.status}")
                     failed += 1
                 future.release()
                 results[task.key] = result
                 if on_result is not None:
                     on_result(task, result, lambda line: bar.write(line, file=sys.stderr))
                 bar.update()
-            running = _running(client, keys) if pending else 0
-            bar.set_postfix_str(f"running {running}, failed {failed}")
+            status = f"running {_running(client, keys) if pending else 0}, failed {failed}"
+            if status != bar.postfix:  # a redraw only on change keeps logs short
+                bar.set_postfix_str(status)
     return results

@@ -36,7 +36,7 @@ from .capacity import device as find_device, fit_message, usage, utilisation
 from .cmd_eval import condition_images
 from .cmd_match import match_images
 from .cmd_report import failed_report, lookup, store_report, synthesis_job
-from .engine import Task, TaskFailure, run_tasks, task_key
+from .engine import Task, TaskFailure, run_tasks, shared, task_key
 from .report_cache import golden_source_hash, read_result, source_hash, store_result
 
 __all__ = ["Grid", "configurations", "scene_digest", "quality_task", "plan_tasks",
@@ -124,8 +124,9 @@ def _quality_path(cache, key):
     return Path(cache) / "quality" / f"{key}.json"
 
 
-def quality_task(left, right, truth, params, cache, key):
-    """On a worker: correct matches of ``params`` on one conditioned scene.
+def quality_task(scene, params, cache, key):
+    """On a worker: correct matches of ``params`` on one conditioned scene, ``(left,
+    right, ground truth)``.
 
     Returns the metrics of :func:`npstereo.golden.quality.evaluate` with ``seconds`` and
     ``cached``; the result is stored in the shared ``cache`` when the worker can write
@@ -136,6 +137,7 @@ def quality_task(left, right, truth, params, cache, key):
         found = read_result(path)
         if found is not None:
             return found
+    left, right, truth = scene
     start = time.perf_counter()
     disparity = match_images(left, right, params, threads=1)
     result = dict(quality_of(disparity, truth, params.disparities).as_dict(),
@@ -170,6 +172,7 @@ def plan_tasks(configs, scenes, dev, pnr, freq, timeout, cache, engine):
     golden_sources = golden_source_hash()
     for label, (left, right, truth) in scenes.items():
         digest = scene_digest(left, right, truth)
+        scene = shared((left, right, truth), f"scene-{digest}")
         for index, params in enumerate(configs):
             golden = _golden(params)
             key = task_key("quality", repr(golden), digest, golden_sources)
@@ -180,31 +183,32 @@ def plan_tasks(configs, scenes, dev, pnr, freq, timeout, cache, engine):
                 plan.aliases[(index, label)] = key
             else:
                 plan.owners[key] = ("quality", index, label)
-                plan.tasks.append(Task(key, quality_task,
-                                       (left, right, truth, golden, cache_text, key),
+                plan.tasks.append(Task(key, quality_task, (scene, golden, cache_text, key),
                                        f"quality {label}: {params.describe()}"))
     order = sorted(range(len(configs)), key=lambda i: (configs[i].transform == "ext-census",
                                                        configs[i].block))
     hardware_sources = source_hash()
     for index in order:
         params = configs[index]
-        found = lookup(params, (dev.target,), pnr, freq, cache, _ecp5_part(dev))
+        found = lookup(params, (dev.target,), pnr, freq, cache, _ecp5_part(dev, pnr))
         if found is not None:
             plan.synthesis[index] = found
             continue
         key = task_key("synthesis", repr(params), dev.target, pnr, freq, timeout, engine,
-                       _ecp5_part(dev), hardware_sources)
+                       _ecp5_part(dev, pnr), hardware_sources)
         plan.owners[key] = ("synthesis", index, None)
         plan.tasks.append(Task(key, synthesis_job,
                                (params, (dev.target,), pnr, freq, timeout, cache_text,
-                                engine, _ecp5_part(dev)),
+                                engine, _ecp5_part(dev, pnr)),
                                f"synthesis {dev.target}: {params.describe()}"))
     return plan
 
 
-def _ecp5_part(dev):
-    """The ECP5 part a synthesis result is checked (and placed) against."""
-    return dev.name if dev.target == "ecp5" else "ecp5-85k"
+def _ecp5_part(dev, pnr):
+    """The ECP5 part nextpnr places on. Synthesis alone does not depend on the part: its
+    result is cached once for every part (checked against the LFE5U-85F as ``npstereo
+    report`` checks it) and :func:`_point` measures it against ``dev``."""
+    return dev.name if dev.target == "ecp5" and pnr else "ecp5-85k"
 
 
 def explore(client, configs, scenes, dev, pnr=False, freq=150.0, timeout=None, cache=None,
@@ -238,7 +242,7 @@ def explore(client, configs, scenes, dev, pnr=False, freq=150.0, timeout=None, c
             fresh = not result.get("cached", True)
         else:
             plan.synthesis[index] = result
-            store_report(result, cache, pnr, freq, _ecp5_part(dev))
+            store_report(result, cache, pnr, freq, _ecp5_part(dev, pnr))
             fresh = any(not r.get("cached", True) for r in result["results"].values())
             target = result["results"][dev.target]
             write(f"{task.label}: {target['status']}"

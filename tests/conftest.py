@@ -1,4 +1,5 @@
-"""Shared fixtures: small seeded synthetic stereo pairs (no external data in tests)."""
+"""Shared fixtures: small seeded synthetic stereo pairs (no external data in tests); the
+tests marked ``dask`` kept together."""
 
 import pytest
 
@@ -15,3 +16,12 @@ def small_pair():
 def default_pair():
     """The embedded default scene of ``make demo`` (160 x 120, D = 32, seed 0)."""
     return synthetic_pair()
+
+
+def pytest_collection_modifyitems(items):
+    """Tests marked ``dask`` start a cluster of 2 worker processes each: under ``make
+    test`` (``pytest -n 2 --dist loadgroup``) they share one xdist worker, so two clusters
+    never compete for the 2 cores and a module's cluster fixture runs once."""
+    for item in items:
+        if item.get_closest_marker("dask") is not None:
+            item.add_marker(pytest.mark.xdist_group("dask"))

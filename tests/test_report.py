@@ -277,12 +277,12 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     assert report_cache.seed_cache(sweep, tmp_path / "other") == 1
 
 
-
 #: Figures of a synthesis result that must not depend on where it ran.
 FIGURES = ("status", "logic", "registers", "block_rams", "lut_rams", "memory_bits",
            "ffram_bits", "memories", "logic_levels", "message")
 
 
+@pytest.mark.dask
 def test_sweep_on_dask_gives_the_numbers_of_one_process(tmp_path):
     """``report --paper``'s engine: configurations as tasks on a LocalCluster of two worker
     processes give the figures that evaluate() gives in this process, in the order of the
