@@ -176,8 +176,11 @@ def pareto_plot(path, points, labels, front, recommended, device, colour_key, co
     fits = np.array([bool(points[i]["fits"]) for i in shown])
     finite = colours[np.isfinite(colours)]
     low, high = (finite.min(), finite.max()) if len(finite) else (0.0, 1.0)
-    if low == high:
-        low, high = low - 0.5, high + 0.5
+    if high - low < 1:
+        # Colours a fraction of a MHz or of a LUT level apart would look like a
+        # difference that matters; below one unit they stay close.
+        middle = (low + high) / 2
+        low, high = middle - 0.5, middle + 0.5
     scatter = None
     for mask, edge, style in ((fits, "black", "-"), (~fits, "red", "--")):
         if mask.any():
@@ -186,7 +189,7 @@ def pareto_plot(path, points, labels, front, recommended, device, colour_key, co
                                    edgecolors=edge, linewidths=1.2, linestyles=style,
                                    alpha=0.85, zorder=3, plotnonfinite=True)
     if scatter is not None and len(finite):
-        figure.colorbar(scatter, ax=axes, label=colour_label)
+        figure.colorbar(scatter, ax=axes, label=colour_label, format="%.1f")
     for k, i in enumerate(shown):
         axes.annotate(labels[i], (logic[k], quality[k]), xytext=(6, 5),
                       textcoords="offset points", fontsize=7)
