@@ -30,7 +30,7 @@ demo: $(STAMP) icarus
 	$(VENV)/bin/npstereo demo --out build/demo
 
 test: $(STAMP) icarus
-	$(PY) -m pytest -n $(JOBS) -q
+	$(PY) -m pytest -n $(JOBS) --dist loadgroup -q
 
 bench: $(STAMP) icarus
 	@for b in tests/bench_*.py; do $(PY) $$b --dataset "$(DATASET)" || exit $$?; done

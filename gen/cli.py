@@ -18,7 +18,7 @@ from ..params import UserError
 __all__ = ["main", "UsageError", "build_parser"]
 
 #: Subcommand modules, in the order ``npstereo --help`` lists them.
-COMMANDS = ["match", "eval", "paper", "demo", "verilog", "cosim", "report"]
+COMMANDS = ["match", "eval", "paper", "demo", "verilog", "cosim", "report", "explore"]
 
 
 class UsageError(UserError):

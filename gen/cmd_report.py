@@ -2,9 +2,10 @@
 
 One configuration (``--transform ... --width ... --height ...``) prints a table per target;
 ``--paper`` runs the paper's sweep (four transforms x blocks 7..19 at 450 x 375, D = 100,
-R = 10) and writes markdown, JSON and PNG plots. Results are cached by configuration,
-generated Verilog and tool versions (:mod:`.report_cache`), so a rerun only synthesises
-what changed.
+R = 10) and writes markdown, JSON and PNG plots. The sweep's configurations are tasks on
+Dask distributed (:mod:`.engine`: an embedded LocalCluster, or ``--scheduler``). Results
+are cached by configuration, generated Verilog and tool versions (:mod:`.report_cache`),
+so a rerun only synthesises what changed.
 """
 
 import dataclasses
@@ -12,109 +13,187 @@ import json
 import math
 import os
 import sys
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from tqdm import tqdm
 
 from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable, cycles_per_frame, memory_bits
 from ..hdl.verilog import TOP_NAME, core_verilog
-from ..params import UserError
+from ..params import StereoParams, UserError
 from .atomic import write_text
 from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
+from .engine import Task, TaskFailure, add_engine_arguments, check_engine_arguments, \
+    cluster, run_tasks, task_key
 from .paper_resources import paper_configurations
 from .plots import sweep_plots
-from .report_cache import cache_key, design, seed_cache, source_hash
+from .report_cache import cache_key, design, memoised_digest, read_result, seed_cache, \
+    source_hash, store_result
 from .report_tables import format_table, sweep_markdown
 from .synth import ENGINES, TARGETS, synthesise, tool_versions
 
-__all__ = ["add_parser", "run", "evaluate", "run_sweep"]
+__all__ = ["add_parser", "run", "evaluate", "lookup", "run_sweep", "store_report",
+           "failed_report", "synthesis_tasks", "synthesis_job"]
+
+#: The part nextpnr places on unless another is asked for.
+_DEFAULT_DEVICE = "ecp5-85k"
 
 
-def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, engine=None):
+def _path(cache, params, target, pnr, freq, digest, device):
+    return Path(cache) / f"{cache_key(params, target, pnr, freq, digest, device)}.json"
+
+
+def _report(params, digest, results):
+    return {"params": dataclasses.asdict(params), "verilog_sha": digest,
+            "cycles_per_frame": cycles_per_frame(params),
+            "expected_memory_bits": memory_bits(params), "results": results}
+
+
+def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, engine=None,
+             device=_DEFAULT_DEVICE):
     """Synthesis figures of one configuration for each target, with cycles and frame rate.
 
     Results that are ``ok`` or ``failed`` are cached in ``cache`` (a folder) when given;
     timeouts are not, so a longer ``--timeout`` retries them. A memory count that differs
     from the architecture's (:func:`~npstereo.hdl.plan.memory_bits`) is noted in the
-    result's message.
+    result's message. ``device``: the ECP5 part placed on (:mod:`.capacity`).
     """
     results = {}
     cycles = cycles_per_frame(params)
     expected_bits = memory_bits(params)
     digest, verilog = design(params, cache)
     for target in targets:
-        path = None if cache is None else (
-            Path(cache) / f"{cache_key(params, target, pnr, freq, digest)}.json")
-        if path is not None and path.exists():
-            results[target] = json.loads(path.read_text())
-            results[target]["cached"] = True
+        path = None if cache is None else _path(cache, params, target, pnr, freq, digest,
+                                                device)
+        cached = None if path is None else read_result(path)
+        if cached is not None:
+            results[target] = cached
             continue
         if verilog is None:
             verilog = core_verilog(params)
         result = synthesise(verilog, target, TOP_NAME, pnr=pnr, freq=freq, timeout=timeout,
-                            engine=engine)
+                            engine=engine, device=device)
         if target == "ecp5":
             result.update(pnr=pnr, freq=freq)
+            if device != _DEFAULT_DEVICE:
+                result["device"] = device
         if result["status"] == "ok" and result["memory_bits"] != expected_bits:
             result["message"] = (f"memory bits {result['memory_bits']} differ from the "
                                  f"architecture's {expected_bits}")
         if result.get("fmax_mhz"):
             result["frames_per_second"] = result["fmax_mhz"] * 1e6 / cycles
         if path is not None and result["status"] != "timeout":
-            write_text(path, json.dumps(result, indent=1))
+            store_result(path, result)
         results[target] = dict(result, cached=False)
-    return {"params": dataclasses.asdict(params), "verilog_sha": digest,
-            "cycles_per_frame": cycles, "expected_memory_bits": expected_bits,
-            "results": results}
+    return _report(params, digest, results)
 
 
-def _job(params, targets, pnr, freq, timeout, cache, engine):
-    """One sweep cell in a worker process; never raises, so the sweep goes on."""
+def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=_DEFAULT_DEVICE):
+    """The report :func:`evaluate` would give, from ``cache`` alone (nothing generated or
+    synthesised), or None when any of it is not there."""
+    digest = None if cache is None else memoised_digest(params, cache)
+    if digest is None:
+        return None
+    results = {t: read_result(_path(cache, params, t, pnr, freq, digest, device))
+               for t in targets}
+    if any(r is None for r in results.values()):
+        return None
+    return _report(params, digest, results)
+
+
+def store_report(report, cache, pnr, freq, device=_DEFAULT_DEVICE):
+    """Put the cacheable results of a report that a worker computed into ``cache`` (the
+    client's copy: a remote worker may not share this file system)."""
+    if cache is None or not report.get("verilog_sha"):
+        return
+    params = StereoParams(**report["params"])
+    for target, result in report["results"].items():
+        if result["status"] != "timeout" and not result.get("cached"):
+            store_result(_path(cache, params, target, pnr, freq, report["verilog_sha"],
+                               device), result)
+
+
+def failed_report(params, targets, message):
+    """The report of a configuration whose evaluation crashed: every target failed."""
+    return {"params": dataclasses.asdict(params), "cycles_per_frame": None,
+            "expected_memory_bits": memory_bits(params),
+            "results": {t: {"target": t, "status": "failed", "fmax_mhz": None,
+                            "message": message[:200]} for t in targets}}
+
+
+def synthesis_job(params, targets, pnr, freq, timeout, cache, engine,
+                  device=_DEFAULT_DEVICE):
+    """One sweep cell on a worker; never raises, so the sweep goes on.
+
+    The worker uses the shared cache when it can write there (a remote worker may not
+    see the client's folder: the client then keeps the results).
+    """
+    if cache is not None:
+        try:
+            Path(cache).mkdir(parents=True, exist_ok=True)
+        except OSError:
+            cache = None
     try:
-        return evaluate(params, targets, pnr, freq, timeout, cache, engine)
+        return evaluate(params, targets, pnr, freq, timeout, cache, engine, device)
     except Exception as error:  # a crash in generation is a cell's result, not the sweep's
-        return {"params": dataclasses.asdict(params), "cycles_per_frame": None,
-                "expected_memory_bits": memory_bits(params),
-                "results": {t: {"target": t, "status": "failed", "fmax_mhz": None,
-                                "message": f"{type(error).__name__}: {error}"[:200]}
-                            for t in targets}}
+        return failed_report(params, targets, f"{type(error).__name__}: {error}")
 
 
 def _order(params):
     return (params["transform"], params["block"], params.get("line_buffer", "auto"))
 
 
-def run_sweep(configurations, targets, pnr, freq, timeout, cache, jobs, progress=None,
-              engine=None):
-    """Evaluate configurations in ``jobs`` processes, with a progress bar on stderr and a
-    line per finished configuration.
+def _status_line(report):
+    return ", ".join(
+        f"{t} {r['status']}" + ("" if r["status"] == "ok" else f" ({r.get('message', '')})")
+        + (" (cached)" if r.get("cached") else "")
+        for t, r in report["results"].items())
 
-    ``progress(reports)`` is called with the reports so far after each configuration, so
-    a long sweep leaves its partial results behind.
+
+def synthesis_tasks(configurations, targets, pnr, freq, timeout, cache, engine,
+                    device=_DEFAULT_DEVICE):
+    """``(reports from the cache, tasks for the rest)`` of a sweep: one :class:`Task` per
+    configuration not wholly in ``cache``, cheap cells first (ext. census takes many
+    times longer than the other three, and a sweep stopped early should hold as many
+    cells as possible)."""
+    cached, tasks = [], []
+    for p in sorted(configurations, key=lambda p: (p.transform == "ext-census", p.block,
+                                                   p.stored_rows)):
+        report = lookup(p, targets, pnr, freq, cache, device)
+        if report is not None:
+            cached.append(report)
+            continue
+        key = task_key("synthesis", repr(p), list(targets), pnr, freq, timeout, engine,
+                       device, source_hash())
+        tasks.append(Task(key, synthesis_job, (p, tuple(targets), pnr, freq, timeout,
+                                      None if cache is None else str(cache), engine, device),
+                          p.describe()))
+    return cached, tasks
+
+
+def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progress=None,
+              engine=None):
+    """Evaluate configurations as tasks on ``client``'s Dask cluster, with a progress bar
+    on stderr and a line per finished configuration.
+
+    What the cache holds is not submitted. ``progress(reports)`` is called with the
+    reports so far after each configuration, so a long sweep leaves its partial results
+    behind.
     """
-    reports = []
-    with ProcessPoolExecutor(max_workers=jobs) as pool, \
-            tqdm(total=len(configurations), desc="synthesis", unit="config",
-                 file=sys.stderr) as bar:
-        # Cheap cells first: ext. census takes many times longer than the other three,
-        # and a sweep stopped early should hold as many cells as possible.
-        submitted = sorted(configurations, key=lambda p: (p.transform == "ext-census",
-                                                          p.block, p.stored_rows))
-        futures = {pool.submit(_job, p, targets, pnr, freq, timeout, cache, engine): p
-                   for p in submitted}
-        for future in as_completed(futures):
-            report = future.result()
-            p = futures[future]
-            status = ", ".join(
-                f"{t} {r['status']}" + ("" if r["status"] == "ok" else f" ({r.get('message', '')})")
-                + (" (cached)" if r.get("cached") else "")
-                for t, r in report["results"].items())
-            bar.write(f"{p.describe()}: {status}", file=sys.stderr)
-            bar.update()
-            reports.append(report)
-            if progress is not None:
-                progress(_in_order(reports, configurations))
+    reports, tasks = synthesis_tasks(configurations, targets, pnr, freq, timeout, cache,
+                                     engine)
+    for report in reports:
+        print(f"{StereoParams(**report['params']).describe()}: {_status_line(report)}",
+              file=sys.stderr)
+
+    def finished(task, report, write):
+        if isinstance(report, TaskFailure):  # the task killed its workers
+            report = failed_report(task.args[0], task.args[1], report.message)
+        store_report(report, cache, pnr, freq)
+        write(f"{task.label}: {_status_line(report)}")
+        reports.append(report)
+        if progress is not None:
+            progress(_in_order(reports, configurations))
+
+    run_tasks(client, tasks, "synthesis", on_result=finished)
     return _in_order(reports, configurations)
 
 
@@ -152,7 +231,7 @@ def add_parser(subparsers):
     parser.add_argument("--json", type=Path, help="write the results as JSON")
     parser.add_argument("--paper", action="store_true",
                         help="the paper's sweep: 4 transforms x blocks 7..19, 450x375, D=100, R=10")
-    parser.add_argument("--jobs", type=int, default=1, help="parallel syntheses (default 1)")
+    add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("docs/resources"),
                         help="output folder of --paper (default docs/resources)")
     parser.add_argument("--cache", type=Path,
@@ -166,8 +245,10 @@ def add_parser(subparsers):
 
 
 def _check(args):
-    if args.jobs < 1:
-        raise UserError(f"--jobs must be >= 1, not {args.jobs}")
+    check_engine_arguments(args.workers, args.scheduler)
+    if not args.paper and (args.scheduler is not None or args.workers is not None):
+        raise UserError("--scheduler and --workers are for --paper: one configuration "
+                        "is synthesised here")
     if not (args.timeout > 0 and math.isfinite(args.timeout)):
         raise UserError(f"--timeout must be a positive number of seconds, not {args.timeout:g}")
     if not (args.freq > 0 and math.isfinite(args.freq)):
@@ -199,9 +280,15 @@ def run(args):
             raise UserError("--width and --height are required (or use --paper)")
         configurations = [params_from_args(args).with_size(args.width, args.height)]
         check_buildable(configurations[0])
-    reports = run_sweep(configurations, targets, args.pnr, args.freq, args.timeout, cache,
-                        args.jobs, progress=(lambda done: _write_sweep(done, args.out))
-                        if args.paper else None, engine=args.yosys)
+    if args.paper:
+        with cluster(args.scheduler, args.workers) as client:
+            reports = run_sweep(configurations, targets, args.pnr, args.freq, args.timeout,
+                                cache, client, engine=args.yosys,
+                                progress=lambda done: _write_sweep(done, args.out))
+    else:
+        reports = [synthesis_job(configurations[0], targets, args.pnr, args.freq,
+                                 args.timeout, cache, args.yosys)]
+        print(f"{configurations[0].describe()}: {_status_line(reports[0])}", file=sys.stderr)
     document = {"tools": tool_versions(), "reports": reports}
     if args.paper:
         for path in _write_sweep(reports, args.out):

@@ -9,13 +9,14 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter
 
 from ..params import TRANSFORMS
 from .atomic import atomic_path
 from .images import colour_disparity
 from .paper_resources import PAPER_BLOCKS, PAPER_CLOCK, PAPER_LOGIC, PAPER_MEMORY
 
-__all__ = ["save_figure", "plot_series", "disparity_grid", "sweep_plots"]
+__all__ = ["save_figure", "plot_series", "disparity_grid", "sweep_plots", "pareto_plot"]
 
 
 def save_figure(path, figure):
@@ -135,3 +136,95 @@ def sweep_plots(reports, out):
             figure.savefig(tmp, dpi=110)
         written.append(target_path)
     return written
+
+
+def pareto_plot(path, points, labels, front, recommended, device, colour_key, colour_label,
+                title):
+    """Quality against logic of an exploration, the picture a person reads at a glance.
+
+    Parameters
+    ----------
+    path : path
+        The PNG to write.
+    points : list of dict
+        Explorer points (:func:`npstereo.gen.explore.explore`): ``logic``, ``memory_bits``,
+        ``fits``, the clean quality first in ``quality``, and ``colour_key``.
+    labels : list of str
+        A short name per point, written beside it.
+    front : list of int
+        Indices of the Pareto front (drawn as a staircase).
+    recommended : int or None
+        Index of the recommendation (ringed).
+    device : npstereo.gen.capacity.Device
+        Its logic capacity is the vertical line.
+    colour_key, colour_label : str
+        The point field that colours the points (Fmax, or the logic depth without place
+        and route) and its colour-bar label.
+    title : str
+    """
+    shown = [i for i, p in enumerate(points) if p["logic"] is not None
+             and next(iter(p["quality"].values())).get("correct") is not None]
+    figure = Figure(figsize=(8.8, 5.6))
+    axes = figure.add_subplot()
+    logic = np.array([points[i]["logic"] for i in shown], dtype=float)
+    quality = np.array([next(iter(points[i]["quality"].values()))["correct"] for i in shown])
+    memory = np.array([points[i]["memory_bits"] for i in shown], dtype=float)
+    values = [points[i].get(colour_key) for i in shown]
+    colours = np.array([np.nan if v is None else v for v in values], dtype=float)
+    largest = max(memory.max(), 1.0) if len(memory) else 1.0
+    sizes = 40 + 560 * memory / largest
+    fits = np.array([bool(points[i]["fits"]) for i in shown])
+    finite = colours[np.isfinite(colours)]
+    low, high = (finite.min(), finite.max()) if len(finite) else (0.0, 1.0)
+    if high - low < 1:
+        # Colours a fraction of a MHz or of a LUT level apart would look like a
+        # difference that matters; below one unit they stay close.
+        middle = (low + high) / 2
+        low, high = middle - 0.5, middle + 0.5
+    scatter = None
+    for mask, edge, style in ((fits, "black", "-"), (~fits, "red", "--")):
+        if mask.any():
+            scatter = axes.scatter(logic[mask], quality[mask], s=sizes[mask],
+                                   c=colours[mask], cmap="viridis", vmin=low, vmax=high,
+                                   edgecolors=edge, linewidths=1.2, linestyles=style,
+                                   alpha=0.85, zorder=3, plotnonfinite=True)
+    if scatter is not None and len(finite):
+        figure.colorbar(scatter, ax=axes, label=colour_label, format="%.1f")
+    for k, i in enumerate(shown):
+        axes.annotate(labels[i], (logic[k], quality[k]), xytext=(6, 5),
+                      textcoords="offset points", fontsize=7)
+    on_front = [i for i in front if i in shown]
+    if on_front:
+        xs = [points[i]["logic"] for i in on_front]
+        ys = [next(iter(points[i]["quality"].values()))["correct"] for i in on_front]
+        axes.step(xs, ys, where="post", color="black", linewidth=1.4, alpha=0.7,
+                  zorder=2, label="Pareto front (more correct, less logic)")
+    if recommended is not None and recommended in shown:
+        k = shown.index(recommended)
+        axes.scatter([logic[k]], [quality[k]], s=sizes[k] + 500, facecolors="none",
+                     edgecolors="tab:red", linewidths=2.2, zorder=4)
+        axes.scatter([], [], s=120, facecolors="none", edgecolors="tab:red", linewidths=2.2,
+                     label=f"recommended: {labels[recommended]}")
+    resource = device.logic_resource
+    axes.axvline(resource.capacity, color="tab:red", linewidth=2, linestyle=":",
+                 label=f"{device.part}: {resource.capacity:,} {resource.name}")
+    axes.set_xscale("log")
+    left = min(logic.min() if len(logic) else resource.capacity, resource.capacity) / 1.6
+    right = max(logic.max() if len(logic) else resource.capacity, resource.capacity) * 1.6
+    axes.set_xlim(left, right)
+    axes.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:,.0f}"))
+    axes.xaxis.set_minor_formatter(FuncFormatter(
+        lambda value, _: f"{value:,.0f}" if str(int(value))[0] in "25" else ""))
+    axes.tick_params(axis="x", which="minor", labelsize=7)
+    axes.set_xlabel(f"logic ({resource.name}, log scale)")
+    axes.set_ylabel("correct matches, clean (%)")
+    axes.grid(alpha=0.3, which="both")
+    for bits in sorted({int(largest), int(largest / 4)} - {0}):
+        axes.scatter([], [], s=40 + 560 * bits / largest, color="lightgray",
+                     edgecolors="black", label=f"{bits:,} memory bits")
+    axes.scatter([], [], s=60, color="lightgray", edgecolors="red", linestyles="--",
+                 label="does not fit the device")
+    axes.legend(fontsize=7, loc="lower right", labelspacing=1.3, borderpad=0.9)
+    axes.set_title(title, fontsize=9)
+    figure.tight_layout()
+    save_figure(path, figure)

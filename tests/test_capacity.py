@@ -1,9 +1,16 @@
-"""ECP5 LFE5U-85F capacity check: utilisation and ``does not fit`` before place and route."""
+"""The device table and the capacity check: utilisation and ``does not fit`` (before place
+and route for ECP5)."""
 
 import time
 
-from npstereo.gen.capacity import ECP5_85K, ecp5_utilisation, fit_message
+import pytest
+
+from npstereo.gen.capacity import DEVICES, device, fit_message, utilisation
 from npstereo.gen.synth import synthesise
+
+
+def ecp5_utilisation(result):
+    return utilisation(result, "ecp5-85k")
 
 
 def _result(**counts):
@@ -25,10 +32,9 @@ def test_over_capacity_names_the_resource():
     assert fit_message(used) == "does not fit (112 % LUT)"
     both = ecp5_utilisation(_result(logic=90000, registers=100000))
     assert fit_message(both) == "does not fit (120 % FF, 108 % LUT)"
-    # Broken variant: one resource just at capacity fits, one more unit does not.
-    assert fit_message(ecp5_utilisation(_result(dsps=ECP5_85K["MULT18X18D"]))) is None
-    assert fit_message(ecp5_utilisation(_result(dsps=ECP5_85K["MULT18X18D"] + 1))) \
-        == "does not fit (101 % DSP)"
+    # One resource just at capacity fits, one more unit does not.
+    assert fit_message(ecp5_utilisation(_result(dsps=156))) is None
+    assert fit_message(ecp5_utilisation(_result(dsps=157))) == "does not fit (101 % DSP)"
 
 
 #: 160 independent 18x18 products: 160 MULT18X18D where the 85k has 156.
@@ -62,3 +68,32 @@ def test_small_design_fits_and_has_utilisation():
     assert result["utilisation"]["FF"] == round(100 * 8 / 83640, 1)
     cyclone = synthesise(design, "cyclonev", "top")
     assert cyclone["utilisation"] is None and cyclone["fits"] is None
+
+
+def test_device_table_has_a_reference_for_every_number():
+    assert set(DEVICES) == {"ecp5-85k", "ecp5-45k", "ecp5-25k", "cyclonev-a9", "ep2s180"}
+    for dev in DEVICES.values():
+        names = [r.name for r in dev.resources]
+        assert names[:2] in (["LUT", "FF"], ["ALUT", "FF"])
+        assert all(r.capacity > 0 and len(r.reference) > 20 for r in dev.resources)
+        assert dev.block_ram_bits > 0
+    # The table's numbers agree with each other: blocks x bits per block, the EP2S180's
+    # three kinds of memory block, the ECP5 capacity the synthesis flow checks.
+    assert DEVICES["ecp5-85k"].block_ram_bits == 208 * 18432
+    assert DEVICES["cyclonev-a9"].block_ram_bits == 1220 * 10240
+    assert DEVICES["ep2s180"].capacity("RAM bits") == 930 * 576 + 768 * 4608 + 9 * 589824
+    assert DEVICES["ecp5-85k"].capacity("LUT") == 41820 * 2          # two LUT4 per slice
+    assert [DEVICES[f"ecp5-{s}"].nextpnr for s in ("25k", "45k", "85k")] == \
+        ["--25k", "--45k", "--85k"]
+
+
+def test_unknown_device_is_one_line():
+    with pytest.raises(Exception, match="device must be one of ecp5-85k, .*, not 'xc7a35t'"):
+        device("xc7a35t")
+
+
+def test_cyclone_mlab_cells_count_as_aluts():
+    """An MLAB is 10 ALMs (20 ALUTs) holding 640 bits: one 32x1 MISTRAL_MLAB per ALUT."""
+    used = utilisation(_result(logic=1000, lut_rams=20, block_rams=61, registers=4542),
+                       "cyclonev-a9")
+    assert used == {"ALUT": round(100 * 1020 / 227120, 1), "FF": 1.0, "M10K": 5.0}

@@ -17,7 +17,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 from PIL import Image
 
-from npstereo.gen import cmd_report, report_cache
+from npstereo.gen import cmd_report, engine, report_cache
 from npstereo.gen.cli import main
 from npstereo.gen.paper_resources import paper_configurations
 from npstereo.gen.plots import sweep_plots
@@ -166,7 +166,7 @@ def test_failed_cell_keeps_the_sweep_going(monkeypatch):
         raise RuntimeError("elaboration blew up")
     monkeypatch.setattr(cmd_report, "evaluate", explode)
     params = paper_configurations()[0]
-    report = cmd_report._job(params, ("cyclonev",), False, 150.0, None, None, None)
+    report = cmd_report.synthesis_job(params, ("cyclonev",), False, 150.0, None, None, None)
     assert report["results"]["cyclonev"]["status"] == "failed"
     assert "blew up" in report["results"]["cyclonev"]["message"]
     text = sweep_markdown([report])
@@ -185,7 +185,8 @@ def test_paper_sweep_configurations():
 @pytest.mark.parametrize("argv, message", [
     (["--transform", "census", "--block", "3"], "--width and --height are required"),
     (["--width", "32", "--height", "8", "--block", "4"], "block size"),
-    (["--width", "32", "--height", "8", "--jobs", "0"], "--jobs"),
+    (["--paper", "--jobs", "0"], "--workers must be an integer >= 1"),
+    (["--width", "32", "--height", "8", "--workers", "2"], "--scheduler and --workers are for --paper"),
     (["--width", "32", "--height", "8", "--pnr"], "--pnr"),
     (["--width", "32", "--height", "8", "--target", "vivado"], "invalid choice"),
     (["--paper", "--width", "32"], "--paper"),
@@ -275,3 +276,31 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     sweep.write_text(json.dumps(document))
     assert report_cache.seed_cache(sweep, tmp_path / "other") == 1
 
+
+#: Figures of a synthesis result that must not depend on where it ran.
+FIGURES = ("status", "logic", "registers", "block_rams", "lut_rams", "memory_bits",
+           "ffram_bits", "memories", "logic_levels", "message")
+
+
+@pytest.mark.dask
+def test_sweep_on_dask_gives_the_numbers_of_one_process(tmp_path):
+    """``report --paper``'s engine: configurations as tasks on a LocalCluster of two worker
+    processes give the figures that evaluate() gives in this process, in the order of the
+    configurations; run again on the cache, nothing is submitted (no client at all)."""
+    configurations = [MEMORY_SHAPES[2], MEMORY_SHAPES[1]]
+    cache = tmp_path / "cache"
+    with engine.cluster(workers=2) as client:
+        swept = cmd_report.run_sweep(configurations, ("cyclonev",), False, 150.0, None, cache,
+                                     client)
+    assert [r["params"] for r in swept] == [dataclasses.asdict(p) for p in configurations]
+    for params, report in zip(configurations, swept):
+        direct = cmd_report.evaluate(params, ["cyclonev"])["results"]["cyclonev"]
+        result = report["results"]["cyclonev"]
+        assert result["status"] == "ok" and result["cached"] is False
+        assert {k: result.get(k) for k in FIGURES} == {k: direct.get(k) for k in FIGURES}
+        assert result["memory_bits"] == plan.memory_bits(params)
+    again = cmd_report.run_sweep(configurations, ("cyclonev",), False, 150.0, None, cache,
+                                 client=None)
+    assert all(r["results"]["cyclonev"]["cached"] for r in again)
+    assert [{k: r["results"]["cyclonev"].get(k) for k in FIGURES} for r in again] == \
+        [{k: r["results"]["cyclonev"].get(k) for k in FIGURES} for r in swept]

@@ -1,0 +1,280 @@
+"""``npstereo explore``: which configuration for my device? Quality x logic x memory x
+clock of a grid, every evaluation a task on Dask distributed.
+
+Writes ``explore.json`` (every point, the Pareto front, the recommendation, the device
+table), ``explore.md`` and ``pareto.png`` into ``--out``; :mod:`.explore` does the work,
+:mod:`.engine` runs it (an embedded LocalCluster, or ``--scheduler``).
+"""
+
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+from ..golden.data import load_middlebury
+from ..golden.synthetic import synthetic_pair
+from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES
+from ..params import LINE_BUFFERS, TRANSFORMS, UserError
+from .atomic import write_text
+from .capacity import DEVICES
+from .cmd_eval import Condition, condition_images
+from .cmd_match import check_output_folder, output_errors
+from .engine import add_engine_arguments, check_engine_arguments, cluster
+from .explore import Grid, configurations, explore
+from .plots import pareto_plot
+from .synth import ENGINES, tool_versions
+
+__all__ = ["add_parser", "run", "conditions", "load_scenes", "write_outputs"]
+
+
+def _aggregation(text):
+    """An aggregation value as given: an integer, or a name (``sgm``) passed on as is."""
+    try:
+        return int(text)
+    except ValueError:
+        return text
+
+
+def conditions(noise, bayer, seed):
+    """Clean first, then noise and the Bayer stand-in where asked for."""
+    chosen = [Condition(seed=seed)]
+    if noise:
+        chosen.append(Condition(noise=noise, seed=seed))
+    if bayer:
+        chosen.append(Condition(bayer=True, seed=seed))
+    return chosen
+
+
+def load_scenes(pair, chosen):
+    """``{condition label: (left, right, ground truth)}`` of ``pair``."""
+    if pair.ground_truth is None:
+        raise UserError(f"dataset {pair.name} has no ground truth to evaluate against")
+    return {c.label: (*condition_images(pair, c), pair.ground_truth) for c in chosen}
+
+
+def _number(value, digits=0, suffix=""):
+    return "-" if value is None else f"{value:,.{digits}f}{suffix}"
+
+
+def _quality_cells(point, labels):
+    return [_number(point["quality"][label].get("correct"), 2) for label in labels]
+
+
+def _device_table(dev):
+    lines = [f"{dev.part} (`--device {dev.name}`), measured by the `{dev.target}` synthesis"
+             + (f"; {dev.note}" if dev.note else "") + ".", "",
+             "| resource | capacity | unit | reference |", "|---|---:|---|---|"]
+    lines += [f"| {r.name} | {r.capacity:,} | {r.unit} | {r.reference} |"
+              for r in dev.resources]
+    lines.append(f"| block RAM bits | {dev.block_ram_bits:,} | bit | from the row above |")
+    return lines
+
+
+def explore_markdown(document):
+    """``explore.md``: the grid's table, the recommendation, the device and the run."""
+    dev = DEVICES[document["device"]["name"]]
+    labels = document["conditions"]
+    unit = dev.logic_resource.name
+    ram = dev.resources[2].name
+    lines = [f"# Design space on {dev.part}", "",
+             f"Scene {document['scene']}; hardware {document['width']}x{document['height']}, "
+             f"D={document['disparities']}; frames/s at "
+             + ("nextpnr's Fmax." if document["pnr"] else
+                f"an assumed {document['clock_mhz']:g} MHz clock (no place and route).")
+             + " Correct matches: |d - gt| <= 1 over pixels with known ground truth and "
+               "x >= D, invalid counted wrong. ◆ marks the Pareto front (no other point "
+               "has more correct matches with less logic).", "",
+             "| configuration | " + " | ".join(f"correct {label} (%)" for label in labels)
+             + f" | {unit} (%) | FF | memory bits | {ram} (%) | LUT levels | Fmax MHz "
+               "| frames/s | device | front |",
+             "|---|" + "---:|" * len(labels) + "---:|---:|---:|---:|---:|---:|---:|---|---|"]
+    for i, p in enumerate(document["points"]):
+        use = p["utilisation"] or {}
+        mark = "◆" if p["pareto"] else ""
+        if i == document["recommendation"]:
+            mark += " recommended"
+        lines.append("| " + " | ".join([
+            p["label"], *_quality_cells(p, labels),
+            "-" if p["logic"] is None else f"{p['logic']:,} ({use.get(unit, 0):.1f})",
+            _number(p["registers"]), _number(p["memory_bits"]),
+            "-" if p["used"] is None else f"{p['used'][ram]:,} ({use.get(ram, 0):.1f})",
+            _number(p["logic_levels"], 1), _number(p["fmax_mhz"], 1),
+            _number(p["frames_per_second"], 1), p["verdict"], mark]) + " |")
+    choice = document["recommendation"]
+    lines += ["", "## Recommendation", ""]
+    if choice is None:
+        lines.append(f"None: {document['recommendation_reason']}.")
+    else:
+        p = document["points"][choice]
+        lines.append(f"**{p['label']}** ({document['recommendation_reason']}): "
+                     f"{p['quality'][labels[0]]['correct']:.2f} % correct (clean), "
+                     f"{p['logic']:,} {unit}, {p['memory_bits']:,} memory bits, "
+                     f"{_number(p['frames_per_second'], 1)} frames/s.")
+    lines += ["", "![Pareto plot](pareto.png)", "", "## Device", ""] + _device_table(dev)
+    tasks = document["tasks"]
+    lines += ["", "## Run", "",
+              f"{len(document['points'])} configurations, {tasks['submitted']} tasks "
+              f"submitted, {len(tasks['computed'])} evaluations computed (the rest from the "
+              f"cache), {len(tasks['failed'])} failed; {document['seconds']:.0f} s wall "
+              f"time on {document['engine']}."]
+    if document["skipped"]:
+        lines += ["", "Skipped combinations:", ""] + [f"- {s}" for s in document["skipped"]]
+    if tasks["failed"]:
+        lines += ["", "Failed:", ""] + [f"- {f}" for f in tasks["failed"]]
+    return "\n".join(lines) + "\n"
+
+
+def _short_labels(points):
+    """Labels of only the axes that vary across the grid (transform and block always)."""
+    params = [p["params"] for p in points]
+    varying = [key for key in ("rounds", "aggregation", "line_buffer")
+               if len({p[key] for p in params}) > 1]
+    short = {"rounds": "R", "aggregation": "A", "line_buffer": ""}
+    return [" ".join([p["transform"], str(p["block"])]
+                     + [f"{short[k]}{'=' if short[k] else ''}{p[k]}" for k in varying])
+            for p in params]
+
+
+def write_outputs(document, out):
+    """Write ``explore.json``, ``explore.md`` and ``pareto.png`` (each atomically)."""
+    out = Path(out)
+    dev = DEVICES[document["device"]["name"]]
+    write_text(out / "explore.json", json.dumps(document, indent=1) + "\n")
+    write_text(out / "explore.md", explore_markdown(document))
+    colour = (("fmax_mhz", "Fmax MHz (nextpnr)") if document["pnr"] else
+              ("logic_levels", "LUT levels of the deepest path (synthesis; no --pnr)"))
+    pareto_plot(out / "pareto.png", document["points"], _short_labels(document["points"]),
+                document["pareto"], document["recommendation"], dev, *colour,
+                f"{dev.part}: correct matches against logic, {document['scene']}, "
+                f"{document['width']}x{document['height']} D={document['disparities']} "
+                f"(size: memory bits)")
+    return [out / "explore.json", out / "explore.md", out / "pareto.png"]
+
+
+def _check(args):
+    check_engine_arguments(args.workers, args.scheduler)
+    dev = DEVICES[args.device]
+    if args.pnr and dev.nextpnr is None:
+        ecp5 = ", ".join(name for name, d in DEVICES.items() if d.nextpnr)
+        raise UserError(f"--pnr places and routes ECP5 parts ({ecp5}), not {args.device}")
+    for option, value in (("--timeout", args.timeout), ("--freq", args.freq),
+                          ("--clock", args.clock)):
+        if not (value > 0 and math.isfinite(value)):
+            raise UserError(f"{option} must be a positive number, not {value:g}")
+    if args.min_fps is not None and not (args.min_fps > 0 and math.isfinite(args.min_fps)):
+        raise UserError(f"--min-fps must be a positive number, not {args.min_fps:g}")
+    if args.noise < 0:
+        raise UserError(f"--noise must be a variance >= 0, not {args.noise:g}")
+    check_output_folder(args.out)
+    return dev
+
+
+def run(args):
+    dev = _check(args)
+    grid = Grid(transforms=tuple(args.transform), blocks=tuple(args.block),
+                rounds=tuple(args.rounds), aggregations=tuple(args.aggregation),
+                line_buffers=tuple(args.line_buffer), disparities=args.disparities,
+                width=args.width, height=args.height,
+                lr_threshold=None if args.no_lr_check else args.lr_threshold)
+    configs, skipped = configurations(grid)
+    pair = (synthetic_pair(args.width, args.height, args.disparities, args.seed)
+            if args.synthetic else load_middlebury(args.dataset))
+    scenes = load_scenes(pair, conditions(args.noise, args.bayer, args.seed))
+    cache = None if args.no_cache else args.cache
+    for line in skipped:
+        print(f"skipped {line}", file=sys.stderr)
+    started = time.monotonic()
+    with cluster(args.scheduler, args.workers) as client:
+        engine = (f"the Dask scheduler at {args.scheduler}" if args.scheduler else
+                  f"an embedded LocalCluster of {len(client.scheduler_info()['workers'])} "
+                  "workers")
+        result = explore(client, configs, scenes, dev, pnr=args.pnr, freq=args.freq,
+                         timeout=args.timeout, cache=cache, engine=args.yosys,
+                         clock=args.clock, min_fps=args.min_fps)
+    document = {"device": {"name": dev.name, "part": dev.part, "target": dev.target,
+                           "block_ram_bits": dev.block_ram_bits,
+                           "resources": [r.__dict__ for r in dev.resources]},
+                "scene": pair.name, "conditions": list(scenes), "width": args.width,
+                "height": args.height, "disparities": args.disparities, "pnr": args.pnr,
+                "clock_mhz": args.clock, "min_fps": args.min_fps, "skipped": skipped,
+                "tools": tool_versions(), "engine": engine,
+                "seconds": round(time.monotonic() - started, 1), **result}
+    with output_errors():
+        written = write_outputs(document, args.out)
+    choice = result["recommendation"]
+    if choice is None:
+        print(f"no recommendation: {result['recommendation_reason']}")
+    else:
+        point = result["points"][choice]
+        print(f"recommended for {dev.part}: {point['label']} "
+              f"({point['quality'][next(iter(scenes))]['correct']:.2f} % correct, "
+              f"{point['logic']:,} {dev.logic_resource.name}, {point['verdict']})")
+    print(f"{len(configs)} configurations, {len(result['tasks']['computed'])} evaluations "
+          f"computed, {document['seconds']:.0f} s; wrote " + ", ".join(map(str, written)))
+    return 1 if result["tasks"]["failed"] else 0
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "explore", help="quality x logic x memory x clock of a grid for one device (Dask)",
+        description="Evaluate a grid of configurations on a scene (correct matches, clean "
+                    "and degraded) and in synthesis for a device (logic, registers, memory "
+                    "bits, logic depth; nextpnr Fmax with --pnr), every evaluation a task "
+                    "on Dask distributed; write explore.json, explore.md and pareto.png "
+                    "with the Pareto front and a recommendation.")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--dataset", metavar="DIR", help="Middlebury scene folder")
+    source.add_argument("--synthetic", action="store_true",
+                        help="the synthetic scene at --width x --height (seeded by --seed)")
+    parser.add_argument("--transform", nargs="*", choices=TRANSFORMS, default=list(TRANSFORMS),
+                        help="transforms of the grid (default all four)")
+    parser.add_argument("--block", nargs="*", type=int, default=[9],
+                        help=f"block sizes B of the grid, odd >= 3, at most {MAX_BLOCK} "
+                             "(default 9)")
+    parser.add_argument("--rounds", nargs="*", type=int, default=[1],
+                        help="calculation rounds R of the grid, each dividing D (default 1)")
+    parser.add_argument("--aggregation", nargs="*", type=_aggregation, default=[3],
+                        help="aggregation windows A of the grid, odd >= 1 (default 3)")
+    parser.add_argument("--line-buffer", nargs="*", choices=LINE_BUFFERS, default=["auto"],
+                        help="rows above kept as transforms or costs (default auto)")
+    parser.add_argument("--disparities", type=int, default=100,
+                        help=f"disparity range D, at most {MAX_DISPARITIES} (default 100)")
+    lr = parser.add_mutually_exclusive_group()
+    lr.add_argument("--lr-threshold", type=int, default=3,
+                    help="left/right consistency threshold T >= 0 (default 3)")
+    lr.add_argument("--no-lr-check", action="store_true", help="skip the left/right check")
+    parser.add_argument("--width", type=int, required=True,
+                        help="frame width of the hardware (and of the synthetic scene)")
+    parser.add_argument("--height", type=int, required=True,
+                        help="frame height of the hardware (and of the synthetic scene)")
+    parser.add_argument("--device", required=True, choices=list(DEVICES),
+                        help="the device the cores must fit (docs/explore.md lists them)")
+    parser.add_argument("--pnr", action="store_true",
+                        help="place and route with nextpnr (ECP5 parts) for Fmax")
+    parser.add_argument("--freq", type=float, default=150.0,
+                        help="nextpnr clock constraint in MHz (default 150)")
+    parser.add_argument("--clock", type=float, default=100.0,
+                        help="clock in MHz for frames/s without --pnr (default 100, the "
+                             "paper's clock at 7x7)")
+    parser.add_argument("--min-fps", type=float,
+                        help="frames/s the recommendation must reach")
+    parser.add_argument("--noise", type=float, default=0.0, metavar="VAR",
+                        help="also measure quality under gaussian noise of this variance")
+    parser.add_argument("--bayer", action="store_true",
+                        help="also measure quality on the Bayer stand-in")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the synthetic scene and the noise (default 0)")
+    parser.add_argument("--timeout", type=float, default=3600.0,
+                        help="seconds per synthesis before giving up (default 3600)")
+    parser.add_argument("--yosys", choices=ENGINES, default=None,
+                        help="Yosys engine (default native when installed)")
+    add_engine_arguments(parser)
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
+    parser.add_argument("--cache", type=Path,
+                        default=Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
+                        / "npstereo" / "report",
+                        help="result cache folder, shared with npstereo report")
+    parser.add_argument("--no-cache", action="store_true", help="evaluate everything again")
+    parser.set_defaults(run=run)
