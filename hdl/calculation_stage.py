@@ -41,6 +41,12 @@ from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_m
 __all__ = ["CalculationStage"]
 
 
+def _missing_cost(params):
+    """The cost of a pair that does not exist (x - d < 0): 0 in a box sum, Cmax for SGM
+    (docs/sgm.md), so that no path is drawn towards disparities without a partner."""
+    return params.max_cost if params.is_sgm else 0
+
+
 class CalculationStage(wiring.Component):
     """Aggregated costs and the partition winner of one (position, round) per clock.
 
@@ -251,9 +257,7 @@ class CalculationStage(wiring.Component):
         p = self.params
         start = self.stored + 1
         bits = p.transform_bits
-        # Where x - d < 0 the pair does not exist: 0 in a box sum, Cmax for SGM (docs/
-        # sgm.md), so that no path is drawn towards it.
-        outside = p.max_cost if p.is_sgm else 0
+        outside = _missing_cost(p)
         units = p.per_round
         # x - j*D/R once, then per unit x - d >= 0 <=> x - j*D/R >= i, for i < D/R: beyond
         # D/R every unit's pair exists, below it only the low bits decide (ten comparisons of
