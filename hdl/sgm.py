@@ -413,7 +413,9 @@ class SemiGlobalAggregation(wiring.Component):
         own = _register(m, x * rounds, range(depth), "sgm_row_base")
         nxt = _register(m, Mux(last_column, 0, (x + 1) * rounds), range(depth),
                         "sgm_row_base_next")
-        word_at = 4
+        word_at = 4                 # address 2, read 3, the RAM's output register 4
+        normalise = word_at + 4     # newest word, + P1, minimum of three
+        assert t.rows == normalise + 2, "plan.SGM_ROW_CLOCKS counts the same steps"
         memories, words = [], []
         for name, base, shape in (("top", own, unsigned(2 * word_bits)),
                                   ("top_right", nxt, unsigned(word_bits))):
@@ -433,7 +435,7 @@ class SemiGlobalAggregation(wiring.Component):
                   "top": _register(m, top, word_bits, "sgm_top_newest"),
                   "top-right": _register(m, top_right, word_bits, "sgm_top_right_newest")}
 
-        minima = self._row_minima(m, p2)
+        minima, minima_write = self._row_minima(m, p2, normalise)
         results = {}
         for path in ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
@@ -452,12 +454,11 @@ class SemiGlobalAggregation(wiring.Component):
             neighbours = [before, *plus, after]
             best = [_register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
                               f"{name}_best{i}") for i, v in enumerate(values)]
-            at = word_at + 4
             minimum, bound = minima[path]
             step = [_register(m, _normalised(b, minimum, bound,
-                                             self._aligned(p2[path], t.guide, at,
+                                             self._aligned(p2[path], t.guide, normalise,
                                                            f"{name}_p2"),
-                                             self._aligned(fresh[path], t.guide, at,
+                                             self._aligned(fresh[path], t.guide, normalise,
                                                            f"{name}_fresh")),
                               bits_for(p.p2), f"{name}_step{i}") for i, b in enumerate(best)]
             results[path] = [_register(m, c + s, bits, f"{name}_l{i}")
@@ -467,21 +468,22 @@ class SemiGlobalAggregation(wiring.Component):
         address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
         m.d.sync += address.eq(self._aligned(own, 1, t.rows - 1, "sgm_rows_base")
                                + slots.round(t.rows - 1))
-        for write, data_ in zip(memories, (Cat(*results["top"], *results["top-left"]),
+        for write, written in zip(memories, (Cat(*results["top"], *results["top-left"]),
                                            Cat(*results["top-right"]))):
-            m.d.comb += [write.addr.eq(address), write.data.eq(data_),
+            m.d.comb += [write.addr.eq(address), write.data.eq(written),
                          write.en.eq(self._valid_at(t.rows))]
         # Their minima, once the last round's running minimum is complete.
         running = [self._running_min(m, results[path], t.rows,
                                      f"sgm_{path.replace('-', '_')}_m") for path in ROW_PATHS]
-        write = self._minima_write
-        m.d.comb += [write.addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),
-                     write.data.eq(Cat(*running)),
-                     write.en.eq(slots.first(t.minima) & self._valid_at(t.minima))]
+        m.d.comb += [
+            minima_write.addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),
+            minima_write.data.eq(Cat(*running)),
+            minima_write.en.eq(slots.first(t.minima) & self._valid_at(t.minima))]
         return results
 
-    def _row_minima(self, m, p2):
-        """Per path from above, m of its predecessor and m + P2, slot-aligned at 8.
+    def _row_minima(self, m, p2, offset):
+        """Per path from above, m of its predecessor and m + P2, slot-aligned at ``offset``;
+        and the minima memory's write port.
 
         One word of the three minima per column; position x reads column x + 1 (0 after
         the last column, whose value is then the current row's first), a word top-right
@@ -494,8 +496,7 @@ class SemiGlobalAggregation(wiring.Component):
         memory = Memory(shape=unsigned(3 * bits), depth=p.width, init=[],
                         attrs={"no_rw_check": 1})
         m.submodules.sgm_minima = memory
-        read = memory.read_port(domain="sync")
-        self._minima_write = memory.write_port()
+        read, write = memory.read_port(domain="sync"), memory.write_port()
         m.d.comb += read.addr.eq(_register(m, Mux(x == p.width - 1, 0, x + 1),
                                            range(p.width), "sgm_minima_address"))
         word = dict(zip(ROW_PATHS, _lanes(_register(m, read.data, 3 * bits,
@@ -518,6 +519,6 @@ class SemiGlobalAggregation(wiring.Component):
             name = f"sgm_{path.replace('-', '_')}"
             bound = _register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
                               bits + 1, f"{name}_bound")
-            result[path] = (self._aligned(used[path], 4, 8, f"{name}_m"),
-                            self._aligned(bound, 5, 8, f"{name}_bound"))
-        return result
+            result[path] = (self._aligned(used[path], 4, offset, f"{name}_m"),
+                            self._aligned(bound, 5, offset, f"{name}_bound"))
+        return result, write
