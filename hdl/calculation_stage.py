@@ -34,10 +34,17 @@ from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .plan import calculation_timing, cost_rows, min_tree_plan, vertical_bits
+from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
 
 __all__ = ["CalculationStage"]
+
+
+def _missing_cost(params):
+    """The cost of a pair that does not exist (x - d < 0): 0 in a box sum, Cmax for SGM
+    (docs/sgm.md), so that no path is drawn towards disparities without a partner."""
+    return params.max_cost if params.is_sgm else 0
 
 
 class CalculationStage(wiring.Component):
@@ -76,7 +83,7 @@ class CalculationStage(wiring.Component):
         self.rows = cost_rows(params)
         self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
                            for _ in range(params.per_round)]
-        self.aggregation = Aggregation(params, every)
+        self.aggregation = (SemiGlobalAggregation if params.is_sgm else Aggregation)(params, every)
         timing = calculation_timing(params, every)
         # Offsets (clocks after the input) of the datapath's steps; see elaborate().
         self.transformed, self.stored = timing.transformed, timing.stored
@@ -119,6 +126,9 @@ class CalculationStage(wiring.Component):
         m.d.comb += [aggregation.tag.eq(newest), aggregation.first.eq(slots.first(self.vertical)),
                      aggregation.round.eq(slots.round(self.vertical))]
         m.d.comb += [aggregation.costs[i].eq(c) for i, c in enumerate(costs)]
+        if p.is_sgm:
+            m.d.comb += aggregation.guide.eq(slots.delay(
+                guide_pixels(self.window_left, p.block), 0, self.vertical, "sgm_guide"))
         m.d.comb += [self.sums.eq(aggregation.sums), self.centre.eq(aggregation.centre)]
 
         # WTA of the partition: unit i's leaf carries i, to which the round's first disparity
@@ -243,12 +253,13 @@ class CalculationStage(wiring.Component):
         """Masked costs (or vertical sums of A rows) per unit, at offset ``self.vertical``.
 
         ``tag`` is slot-aligned at ``self.stored + 1``, where the operands are, ``early``
-        a clock before. A cost is 0 where x - d < 0, where its row lies outside the frame,
-        and in slots without a position.
+        a clock before. A cost is 0 (Cmax for SGM) where x - d < 0, where its row lies
+        outside the frame, and in slots without a position.
         """
         p = self.params
         start = self.stored + 1
         bits = p.transform_bits
+        outside = _missing_cost(p)
         units = p.per_round
         # x - j*D/R once, then per unit x - d >= 0 <=> x - j*D/R >= i, for i < D/R: beyond
         # D/R every unit's pair exists, below it only the low bits decide (ten comparisons of
@@ -284,7 +295,7 @@ class CalculationStage(wiring.Component):
                              unit.right.eq(right_words[i][k * bits:(k + 1) * bits]),
                              unit.en.eq(1)]
                 cost = pipe(m, unit.cost, self.costed - start - unit.latency, f"cost{i}_{k}")
-                row_costs.append(Mux(in_row & rows_ok[k], cost, 0))
+                row_costs.append(Mux(in_row & rows_ok[k], cost, outside))
             if self.rows > 1:
                 total = build_sum(m, 1, row_costs, register_plan(self.rows, self.every, 0, True))
                 masked.append(total[:vertical_bits(p)])

@@ -17,13 +17,14 @@ from dataclasses import dataclass
 
 from ..params import ParameterError
 from .common import tag_layout
-from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan
+from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan, tree_levels
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_plan", "INPUT_LATENCY", "cost_rows",
            "vertical_bits", "aggregation_latency", "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
-           "cycles_per_frame", "Memory", "memories", "memory_bits"]
+           "cycles_per_frame", "Memory", "memories", "memory_bits", "SGM_LOOP_CLOCKS",
+           "sgm_min_rounds", "SgmTiming", "sgm_timing", "sgm_memories"]
 
 #: Widest frame the hardware is generated for. 8192 covers 8K video (7680); the line
 #: buffers are W deep (the costs line buffer W * R), so a wider frame only grows memories
@@ -44,11 +45,9 @@ def check_buildable(params):
     The golden model runs any size; the hardware needs the frame size and stays within
     :data:`MAX_WIDTH`, :data:`MAX_BLOCK` and :data:`MAX_DISPARITIES`, checked before
     anything is built so that an oversized request fails at once instead of elaborating
-    for minutes.
+    for minutes. Semi-global aggregation also needs enough rounds for its left path's loop
+    (:func:`sgm_min_rounds`).
     """
-    if params.is_sgm:
-        raise ParameterError("aggregation sgm: the hardware has no semi-global aggregation "
-                             "yet; the golden model has it (match, eval, paper, demo)")
     if params.width is None or params.height is None:
         raise ParameterError("the hardware needs the image size: give width and height "
                              "(--width and --height)")
@@ -61,6 +60,8 @@ def check_buildable(params):
     if params.disparities > MAX_DISPARITIES:
         raise ParameterError(f"disparities must be <= {MAX_DISPARITIES} for the hardware, "
                              f"not {params.disparities}")
+    if params.is_sgm:
+        _check_sgm_rounds(params)
 
 
 def output_width(params):
@@ -143,11 +144,14 @@ VERTICAL_CLOCKS = 5
 
 
 def aggregation_latency(params, every=DEFAULT_EVERY):
-    """Clocks from the aggregation's input to its A x A sums (0 for A = 1).
+    """Clocks from the aggregation's input to its A x A sums (0 for A = 1), or to the
+    summed path costs of semi-global aggregation (:func:`sgm_timing`).
 
     The vertical sum from stored costs (``stored_rows == "costs"``), then the horizontal
     sum: the registered taps, then the tree of 2a + 1 terms.
     """
+    if params.is_sgm:
+        return sgm_timing(params, every).latency
     a = params.agg_radius
     if not a:
         return 0
@@ -303,6 +307,8 @@ def memories(params, every=DEFAULT_EVERY):
     if a and p.stored_rows == "costs":
         result.append(Memory("cost lines", units, p.width * rounds,
                              (p.aggregation - 1) * p.cost_bits))
+    if p.is_sgm:
+        result += sgm_memories(p)
     if rounds > 1:
         result.append(Memory("right-transform stores", units, rounds, rows * p.transform_bits))
         if a:
@@ -324,3 +330,115 @@ def memories(params, every=DEFAULT_EVERY):
 def memory_bits(params, every=DEFAULT_EVERY):
     """Bits the core's memories hold (what Yosys counts in its ``$mem_v2`` cells)."""
     return sum(memory.bits for memory in memories(params, every))
+
+
+# Semi-global aggregation (hdl/sgm.py) ------------------------------------------------------
+
+#: Clocks of the left path's loop besides its minimum tree: the store's read register,
+#: C + a, the running minimum over the rounds, the minimum m, the materialised L, the next
+#: a, and its write into the store before the next position reads it. The loop closes in
+#: a slot of R clocks if R >= T + SGM_LOOP_CLOCKS (docs/hardware.md, "Semi-global
+#: aggregation").
+SGM_LOOP_CLOCKS = 6
+
+#: Clocks from the SGM stage's input to each path's P2: the intensity steps, then P2.
+SGM_GUIDE_CLOCKS = 2
+
+#: Where the left path reads a(x, d) of round 0 from its store (the address is a local
+#: round counter, a register).
+SGM_LEFT_READ = 1
+
+#: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the
+#: row address, its block RAM read address, the read, the RAM's output register, the
+#: top-left store's read register, the newest word's register (the next round's first
+#: value arrives), L + P1, the minimum of the three candidates, the normalisation, + C.
+SGM_ROW_CLOCKS = 10
+
+
+def _sgm_tree_clocks(units):
+    """Registers of a minimum over ``units`` values: one per level (a comparison and the
+    multiplexer it drives fill a 150 MHz clock on ECP5, as in :func:`min_tree_plan`)."""
+    return tree_levels(units)
+
+
+def sgm_min_rounds(disparities):
+    """Fewest rounds R dividing D for which the left path's loop fits a slot, or None.
+
+    R >= T + :data:`SGM_LOOP_CLOCKS` with T = ceil(log2(D/R)); both sides move the same
+    way with R, so every larger divisor fits too.
+    """
+    for rounds in range(1, disparities + 1):
+        if disparities % rounds == 0 and \
+                rounds >= _sgm_tree_clocks(disparities // rounds) + SGM_LOOP_CLOCKS:
+            return rounds
+    return None
+
+
+def _check_sgm_rounds(params):
+    """Refuse (one line) rounds too few for the left path's loop."""
+    tree = _sgm_tree_clocks(params.per_round)
+    if params.rounds >= tree + SGM_LOOP_CLOCKS:
+        return
+    need = sgm_min_rounds(params.disparities)
+    if need is None:
+        raise ParameterError(
+            f"aggregation sgm needs rounds >= {SGM_LOOP_CLOCKS} (the left path's loop), so "
+            f"disparities >= {SGM_LOOP_CLOCKS}, not {params.disparities}")
+    raise ParameterError(
+        f"aggregation sgm needs rounds >= {need} for {params.disparities} disparities "
+        f"(the left path's loop takes {tree + SGM_LOOP_CLOCKS} clocks at "
+        f"{params.per_round} per round), not {params.rounds}")
+
+
+@dataclass(frozen=True)
+class SgmTiming:
+    """Offsets inside the SGM stage, in clocks after its input (the round's costs).
+
+    Each is where round 0 of a position is; round j is j clocks later.
+    """
+    tree: int           #: T, registers of a minimum over the round's D/R values
+    guide: int          #: P2 of every path (slot-aligned)
+    left_read: int      #: the left path reads a(x, d) from its store
+    materialise: int    #: the left path's L(x, d) is formed (m(x - 1) is there)
+    left: int           #: L of the left path
+    rows: int           #: L of the paths from the row above
+    minima: int         #: their minima m(x) are written (the last round's running minimum)
+    latency: int        #: the summed costs S
+
+
+def sgm_timing(params, every=DEFAULT_EVERY):
+    """The SGM stage's offsets (see :mod:`.sgm`).
+
+    The left path reads a(x, d) at ``left_read``, registers C + a a clock later, and its
+    minimum over the round (T registers) and the running minimum over the rounds (one)
+    hold U(x) in the last round; m(x) follows a clock later, ``left_read + 3 + T + R``
+    clocks after the input, which is R clocks into the next position: that position forms
+    its L from m(x - 1) from ``left_read + 3 + T`` on (``materialise``). The paths from
+    above take :data:`SGM_ROW_CLOCKS`; the four L are summed by a tree of four terms
+    (registered as ``every`` says, and at its root).
+    """
+    tree = _sgm_tree_clocks(params.per_round)
+    materialise = SGM_LEFT_READ + 3 + tree
+    left = materialise + 1
+    rows = SGM_ROW_CLOCKS
+    summed = max(left, rows) + sum(register_plan(4, every, 0, True))
+    return SgmTiming(tree, SGM_GUIDE_CLOCKS, SGM_LEFT_READ, materialise, left, rows,
+                     rows + tree + params.rounds, summed)
+
+
+def sgm_memories(params):
+    """The SGM stage's memories (docs/hardware.md, "Memories").
+
+    Block RAM: the previous row's path costs, one word per (column, round) of D/R values,
+    top and top-left in one memory (both read the position's own column), top-right in
+    another (it reads the next column); the three paths' minima, one word per column.
+    LUT RAM: the left path's a(x, d) and the top-left words held for the next position,
+    one word per round each.
+    """
+    p = params
+    word = p.per_round * p.path_cost_bits
+    return [Memory("path rows (top, top-left)", 1, p.width * p.rounds, 2 * word),
+            Memory("path rows (top-right)", 1, p.width * p.rounds, word),
+            Memory("path minima", 1, p.width, 3 * p.path_cost_bits),
+            Memory("left path store", 1, p.rounds, word),
+            Memory("top-left store", 1, p.rounds, word)]

@@ -135,8 +135,10 @@ def golden_words(left, right, params):
 
 
 def _quiet_cycles(params):
-    # Longer than the core's latency (a few lines of R cycles per pixel) under traffic.
-    return 4 * (params.block + params.aggregation + 4) * params.width * params.rounds + 2000
+    # Longer than the core's latency (a few lines of R cycles per pixel) under traffic; the
+    # aggregation window's rows count (none for SGM, whose latency is in clocks).
+    window = 2 * params.agg_radius + 1
+    return 4 * (params.block + window + 4) * params.width * params.rounds + 2000
 
 
 def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_root=None,

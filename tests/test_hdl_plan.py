@@ -22,7 +22,7 @@ from hdl_helpers import frame_beats, run_scenario
 from scenes import stereo_pair
 
 #: Every term of the latency: transforms with and without a tree, R = 1 .. 4, A = 1/3/5,
-#: the L/R check on and off, block sizes 3/5.
+#: the L/R check on and off, block sizes 3/5, semi-global aggregation.
 PERIODS = [
     StereoParams(transform="census", block=3, disparities=8, rounds=1, lr_threshold=1),
     StereoParams(transform="census", block=3, disparities=8, rounds=4, lr_threshold=1),
@@ -32,6 +32,8 @@ PERIODS = [
     StereoParams(transform="census", block=3, disparities=8, rounds=2, aggregation=1,
                  lr_threshold=None),
     StereoParams(transform="ext-census", block=3, disparities=12, rounds=3, lr_threshold=2),
+    StereoParams(transform="census", block=3, disparities=8, rounds=8, aggregation="sgm",
+                 p1=3, p2=20, lr_threshold=1),
 ]
 
 

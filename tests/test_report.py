@@ -114,7 +114,8 @@ def test_small_core_report_and_cache(tmp_path):
 
 #: Shapes of the memory formula beyond test_small_core_report_and_cache's census 3x3, A = 3
 #: (rows above as transforms): the rows above as costs (the cost lines, A - 1 = 4 rows at
-#: 11 bits), R = 1 (stores are registers, not memories), no aggregation and no L/R check.
+#: 11 bits), R = 1 (stores are registers, not memories), no aggregation and no L/R check,
+#: semi-global aggregation (its rows of path costs, minima and stores).
 MEMORY_SHAPES = [
     StereoParams(transform="ext-rank", block=3, disparities=4, rounds=2, aggregation=5,
                  width=16, height=4, line_buffer="costs"),
@@ -122,6 +123,8 @@ MEMORY_SHAPES = [
                  width=16, height=4),
     StereoParams(transform="rank", block=5, disparities=4, rounds=2, aggregation=1,
                  lr_threshold=None, width=16, height=4),
+    StereoParams(transform="census", block=3, disparities=6, rounds=6, aggregation="sgm",
+                 p1=3, p2=20, width=8, height=4),
 ]
 
 

@@ -1,7 +1,7 @@
 """``npstereo verilog``: generated text, lint, and the command line's error handling.
 
-``make test`` lints five configurations covering every transform, R = 1 and R = D, and a
-disparity range that is not a power of two; the full sweep of 25 configurations (block
+``make test`` lints six configurations covering every transform, R = 1 and R = D, a
+disparity range that is not a power of two and semi-global aggregation; the full sweep of 25 configurations (block
 sizes 3..19, D in {16, 64, 100}, R in {1, 2, 4, 10}) runs in ``tests/bench_hdl.py``, which
 prints one line per configuration (generation time, lint result).
 """
@@ -26,6 +26,8 @@ QUICK = [
     StereoParams(transform="census", block=3, disparities=12, rounds=3, width=24, height=8),
     StereoParams(transform="ext-census", block=3, disparities=16, rounds=16,
                  aggregation=1, width=24, height=8),
+    StereoParams(transform="census", block=5, disparities=24, rounds=8, aggregation="sgm",
+                 width=28, height=8),
 ]
 
 

@@ -1,0 +1,524 @@
+"""Semi-global aggregation in hardware: four raster-order paths, summed, bit-exact.
+
+Hardware counterpart of :mod:`npstereo.golden.sgm` (docs/sgm.md is the contract) and the
+aggregation choice beside :mod:`.aggregation`'s A x A box, with its interface: the round's
+D/R costs in, the round's D/R summed costs out, slot-aligned after a fixed latency; plus
+the left gray pixels adaptive P2 compares. The costs arrive as Cmax where x - d < 0 (the
+calculation stage masks them so for SGM), and S(x, d) = L_left + L_top-left + L_top +
+L_top-right leaves for the same WTA, right-referenced WTA and L/R check as the box sums.
+
+Round j carries d = j*D/R + i on lane i (the contiguous partitions of the calculation
+stage): the neighbours d - 1 and d + 1 of a lane are its neighbouring lanes, except across
+the round's edges, where they are the last lane of round j - 1 and the first lane of round
+j + 1, one clock before and after in every stream below.
+
+**Paths from the row above** (top-left, top, top-right). Their predecessor lies in the
+previous row, finished long ago. Each keeps that row's L in block RAM, one word of D/R
+values per (column, round): top and top-left in one memory read at the position's own
+column x, top-right in another read at column x + 1 (both written at column x). Top-left
+needs column x - 1, which position x - 1 of this row has already overwritten: it takes the
+word position x - 1 read for its own column, held for one position in a store of R words
+(LUT RAM). The previous row's minima m (one word of the three per column) are read at
+column x + 1 and handed on by registers: top-right uses the word at once, top a position
+later, top-left two positions later. Then, per lane, L = C + min(Lq(d), Lq(d +- 1) + P1,
+m + P2) - m, in the normalised form C + min(min(Lq(d), Lq(d +- 1) + P1) - m, P2).
+
+**The left path: a loop of one position.** Its predecessor is the previous position, whose
+minimum m(x - 1) over all D disparities is complete only after its last round, while the
+next position's round 0 starts a clock later. The recurrence is therefore split (docs/
+hardware.md, "Semi-global aggregation"): with a(x, d) = min(L(x-1, d), L(x-1, d +- 1) +
+P1) >= m(x - 1),
+
+    L(x, d) = C(x, d) + min(a(x, d) - m(x-1), P2(x)),
+    m(x) = min(U(x) - m(x-1), Cmin(x) + P2(x)),  U(x) = min_d (C(x, d) + a(x, d)),
+
+where U and Cmin = min_d C need no m at all: they are accumulated over the rounds while
+m(x - 1) is still being formed, and m(x) follows from them with one subtraction and one
+comparison. a(x + 1, .) needs only L(x, .), so it is formed as soon as L(x, .) is (one round
+after the other, with m(x - 1) known from round 0 on) and waits in a store of R words (LUT
+RAM) for position x + 1. The loop -- a(x, .), C + a, its minimum U(x), m(x), L(x + 1, .),
+a(x + 2, .) -- closes within a slot if R >= T + 6, T the registers of a minimum over D/R
+values (:func:`npstereo.hdl.plan.sgm_min_rounds`). Every step is at a fixed offset after
+its own position's slot, so the sums have a fixed latency whatever the gaps between
+positions.
+
+**Fresh starts and stale state.** A path whose predecessor is outside the image starts
+fresh, L = C, decided from the tag: the left path at x = 0, top-left at x = 0 or y = 0, top
+at y = 0, top-right at y = 0 or x = W - 1. Its inputs from memory are then not used at all,
+so what a memory held before (another frame, rows above the frame, a reset, power-up)
+never reaches a result of the frame; memories and stores are written only in slots that
+carry a position.
+"""
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from ..params import P2_ADAPT_OFF
+from .common import SlotClock, Store, absolute_difference, bits_for, tag_layout
+from .plan import sgm_timing
+from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
+
+__all__ = ["PATHS", "GUIDE", "guide_pixels", "SemiGlobalAggregation"]
+
+#: The four paths, in the order of golden.sgm.PATHS.
+PATHS = ("left", "top-left", "top", "top-right")
+
+#: The paths whose predecessor lies in the row above.
+ROW_PATHS = PATHS[1:]
+
+#: The left window's pixels adaptive P2 compares, as (dy, dx) from the centre: the pixel
+#: itself, then each path's predecessor in :data:`PATHS` order.
+GUIDE = ((0, 0), (0, -1), (-1, -1), (-1, 0), (-1, 1))
+
+
+def guide_pixels(window, block):
+    """The :data:`GUIDE` pixels of a B x B window (row-major), packed low to high."""
+    r = (block - 1) // 2
+    return Cat(*(window[(dy + r) * block + dx + r] for dy, dx in GUIDE))
+
+
+def _fresh(path, x, y, width):
+    """The path starts fresh at (x, y): its predecessor lies outside the image."""
+    first_column, last_column, first_row = x == 0, x == width - 1, y == 0
+    return {"left": first_column, "top-left": first_column | first_row,
+            "top": first_row, "top-right": first_row | last_column}[path]
+
+
+def _adaptive_p2(step, p1, p2, adapt):
+    """P2_r(p) = max(P1, P2 >> s) with s = max(0, bitlen(g) - t) for the step g (8 bits).
+
+    s >= k exactly when g >= 2^(t + k - 1), i.e. when a bit of g from t + k - 1 up is set:
+    one OR per k and a chain of multiplexers between constants (the largest k wins), no
+    priority encoder and no shifter.
+    """
+    bits = bits_for(p2)
+    value = Const(p2, bits)
+    for shift in range(1, 9 - adapt):
+        value = Mux(step[adapt + shift - 1:].any(), Const(max(p1, p2 >> shift), bits), value)
+    return value
+
+
+def _smaller(lower, upper):
+    """min of two items of a minimum tree (values only)."""
+    return (Mux(upper[0] < lower[0], upper[0], lower[0]),)
+
+
+def _minimum3(centre, lower, upper):
+    """min(centre, lower, upper): the three comparisons side by side, then two
+    multiplexers, instead of two comparisons one behind the other."""
+    lower_wins = (lower < centre) & ~(upper < lower)
+    upper_wins = (upper < centre) & (upper < lower)
+    return Mux(lower_wins, lower, Mux(upper_wins, upper, centre))
+
+
+def _normalised(best, minimum, bound, p2, fresh):
+    """A path from above: min(best - m, P2) for best = min(Lq(d), Lq(d +- 1) + P1) >= m
+    (``bound`` = m + P2), and 0 at a fresh start (L = C)."""
+    return Mux(fresh, 0, Mux(best <= bound, best - minimum, p2))
+
+
+def _materialise(ca, e, cp, cpp, minimum, minimum_p1):
+    """The left path's L(x, d) and L(x, d) + P1 from the terms stored for d and m(x - 1).
+
+    L = C + min(a - m, P2): a - m <= P2 exactly when e = a - P2 <= m, and then L = C + a - m
+    (``ca`` - m), else C + P2 (``cp``); L + P1 likewise from ``minimum_p1`` = m - P1 and
+    ``cpp`` = C + P2 + P1. A fresh start stores e above every m and cp = C.
+    """
+    take = e <= minimum
+    return Mux(take, ca - minimum, cp), Mux(take, ca - minimum_p1, cpp)
+
+
+def _next_minimum(total, bound, previous, previous_p1, capped, capped_p1, fresh):
+    """The left path's m(x) and m(x) - P1.
+
+    m(x) = min(U - m(x-1), Cmin + P2) for U = ``total``: U - m(x-1) <= Cmin + P2 exactly
+    when U <= ``bound`` = Cmin + P2 + m(x-1) (formed a clock ahead, m(x - 1) being there
+    long before U). A fresh start has m(x) = Cmin (``capped`` holds Cmin there).
+    """
+    take = ~fresh & (total <= bound)
+    return Mux(take, total - previous, capped), Mux(take, total - previous_p1, capped_p1)
+
+
+def _taps(m, value, depth, name):
+    """``value`` and free-running copies of it 1 .. ``depth`` clocks late (taps[k])."""
+    taps = [value]
+    for k in range(depth):
+        reg = Signal(value.shape(), name=f"{name}_d{k + 1}", reset_less=True)
+        m.d.sync += reg.eq(taps[-1])
+        taps.append(reg)
+    return taps
+
+
+def _lanes(word, count, bits):
+    """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
+    return [word[i * bits:(i + 1) * bits] for i in range(count)]
+
+
+def _register(m, value, shape, name):
+    """``value`` in a free-running register of ``shape``."""
+    reg = Signal(shape, name=name, reset_less=True)
+    m.d.sync += reg.eq(value)
+    return reg
+
+
+class SemiGlobalAggregation(wiring.Component):
+    """Summed path costs S of the round's D/R disparities, for the position of the tag.
+
+    Parameters
+    ----------
+    params : StereoParams
+        With ``aggregation="sgm"``, width and height, and enough rounds
+        (:func:`npstereo.hdl.plan.check_buildable`).
+    every : int
+        Register spacing of the adder of the four paths (see :mod:`.trees`); everything
+        else is registered where the left path's loop and its timing analysis put it.
+
+    Attributes
+    ----------
+    costs : In(ArrayLayout(unsigned(cost_bits), D/R))
+        C(x, j*D/R + i) on lane i in round j; Cmax where x - d < 0.
+    guide : In(ArrayLayout(unsigned(8), 5))
+        The left gray pixels of :data:`GUIDE` around the position (slot-aligned), for
+        adaptive P2 (unused with a constant P2).
+    tag : In(tag_layout)
+        The position, slot-aligned at the input.
+    first, round : In
+        Slot timing at the input.
+    sums : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
+        S(x, j*D/R + i) on lane i.
+    centre : Out(tag_layout)
+        The position of ``sums`` (the input tag, delayed).
+    latency : int
+        Clocks from the input to the output.
+    from_costs : bool
+        False: SGM keeps no matching costs of the rows above (see :mod:`.aggregation`).
+    """
+
+    from_costs = False
+
+    def __init__(self, params, every=DEFAULT_EVERY):
+        self.params, self.every = params, every
+        self.timing = sgm_timing(params, every)
+        self.latency = self.timing.latency
+        units = params.per_round
+        super().__init__({
+            "costs": In(data.ArrayLayout(unsigned(params.cost_bits), units)),
+            "guide": In(data.ArrayLayout(unsigned(8), len(GUIDE))),
+            "tag": In(tag_layout(params)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
+            "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
+            "centre": Out(tag_layout(params)),
+        })
+
+    def elaborate(self, platform):
+        p, t = self.params, self.timing
+        m = Module()
+        self._slots = slots = SlotClock(m, self.first, self.round, p.rounds, "sgm")
+        self._valid = {}
+        units, bits = p.per_round, p.path_cost_bits
+        costs = Cat(*(self.costs[i] for i in range(units)))
+        #: The round's costs C, k clocks late at index k.
+        self._costs = [_lanes(word, units, p.cost_bits) for word in
+                       _taps(m, costs, max(t.rows, t.materialise) - 1, "sgm_cost")]
+        # Fresh starts of the position, slot-aligned with P2 (two registers after the tag).
+        fresh = {}
+        for path in PATHS:
+            name = f"sgm_fresh_{path.replace('-', '_')}"
+            flag = _register(m, _fresh(path, self.tag.x, self.tag.y, p.width), 1, name)
+            fresh[path] = _taps(m, flag, t.guide - 1, name)[-1]
+        p2 = self._penalties(m)
+        left = self._left_path(m, fresh["left"], p2["left"])
+        rows = self._row_paths(m, fresh, p2)
+        # The four L of each lane meet where the later of the two kinds is.
+        aligned = max(t.left, t.rows)
+        left = _lanes(_taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
+                      units, bits)
+        rows = {path: _lanes(_taps(m, Cat(*lanes), aligned - t.rows,
+                                   f"sgm_{path.replace('-', '_')}_aligned")[-1], units, bits)
+                for path, lanes in rows.items()}
+        plan = register_plan(len(PATHS), self.every, 0, True)
+        for i in range(units):
+            total = build_sum(m, 1, [left[i], *(rows[path][i] for path in ROW_PATHS)], plan)
+            m.d.comb += self.sums[i].eq(total[:p.aggregated_cost_bits])
+        m.d.comb += self.centre.eq(slots.delay(self.tag, 0, self.latency, "sgm_centre"))
+        return m
+
+    def _valid_at(self, offset):
+        """The tag's ``valid`` slot-aligned at ``offset``: the write enable of every state."""
+        if offset not in self._valid:
+            self._valid[offset] = self._slots.delay(self.tag.valid, 0, offset,
+                                                    f"sgm_valid{offset}")
+        return self._valid[offset]
+
+    def _aligned(self, value, start, offset, name):
+        """A slot-aligned ``value`` moved from ``start`` to ``offset`` (constants stay)."""
+        if isinstance(value, Const):
+            return value
+        return self._slots.delay(value, start, offset - start, name)
+
+    def _penalties(self, m):
+        """P2 of each path at the position, slot-aligned at ``timing.guide`` (constants
+        with a constant P2)."""
+        p = self.params
+        if p.p2_adapt == P2_ADAPT_OFF:
+            return {path: Const(p.p2, bits_for(p.p2)) for path in PATHS}
+        centre = self.guide[0]
+        result = {}
+        for k, path in enumerate(PATHS, 1):
+            name = path.replace("-", "_")
+            step = _register(m, absolute_difference(centre, self.guide[k]), 8,
+                             f"sgm_step_{name}")
+            result[path] = _register(m, _adaptive_p2(step, p.p1, p.p2, p.p2_adapt),
+                                     bits_for(p.p2), f"sgm_p2_{name}")
+        return result
+
+    def _running_min(self, m, values, offset, name):
+        """The minimum over a slot's rounds of the minimum over ``values`` (round j's at
+        ``offset`` + j): a tree of T registers, then a running minimum that restarts in
+        round 0; complete in the clock ``offset`` + T + R."""
+        slots = self._slots
+        tree = build_tree(m, 1, [(v,) for v in values], _smaller,
+                          register_plan(len(values), 1))[0]
+        at = offset + self.timing.tree
+        running = Signal(tree.shape(), name=name, reset_less=True)
+        m.d.sync += running.eq(Mux(slots.first(at) | (tree < running), tree, running))
+        return running
+
+    def _left_path(self, m, fresh, p2):
+        """L of the left path per lane, at ``timing.left`` (see the module docstring).
+
+        Offsets after the input, for round j: a(x, d) is read from the store at
+        ``left_read`` + j and registered; C + a a clock later, its minimum tree and the
+        running minimum give U(x) in the last round, and m(x) is formed in the clock
+        after. The terms of L (C + a, a - P2, C + P2, C + P2 + P1) are registered at
+        ``materialise`` + j, where L and L + P1 are formed from m(x - 1); a(x + 1, d) a
+        clock later, written into the store in the clock after that.
+        """
+        p, t, slots = self.params, self.timing, self._slots
+        units, rounds, tree = p.per_round, p.rounds, t.tree
+        bits, p1 = p.path_cost_bits, p.p1
+        plus_bits = (p.max_cost + p.p2 + p1).bit_length()           # L + P1
+        sum_bits = (2 * p.max_cost + p.p2).bit_length()             # C + a
+        bound_bits = (2 * (p.max_cost + p.p2)).bit_length()         # Cmin + P2 + m
+        e_shape = signed(bits + 2)
+        above = 1 << bits                     # e of a fresh start: above every m
+        ones = (1 << plus_bits) - 1           # a candidate that never wins a minimum
+        read, materialise = t.left_read, t.materialise
+        costs = self._costs
+
+        # The position's scalars, slot-aligned a clock after P2.
+        scalars = t.guide + 1
+        add_cp = _register(m, Mux(fresh, 0, p2), bits, "sgm_left_add_cp")
+        add_cpp = _register(m, Mux(fresh, p1, p2 + p1), plus_bits, "sgm_left_add_cpp")
+        sub_e = _register(m, Mux(fresh, -above, p2), e_shape, "sgm_left_sub_e")
+        add_k1 = _register(m, Mux(fresh, -p1, p2 - p1), signed(bits + 1), "sgm_left_add_k1")
+
+        # a(x, .) of round j, written by the previous position.
+        store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
+        a_read = _register(m, store.read(slots.round(read)), units * bits, "sgm_left_a")
+        a_taps = [_lanes(word, units, bits)
+                  for word in _taps(m, a_read, tree + 1, "sgm_left_a")]
+
+        # U(x) = min over d of C + a, Cmin(x) = min over d of C.
+        sums = [_register(m, c + a, sum_bits, f"sgm_left_ca{i}")
+                for i, (c, a) in enumerate(zip(costs[read + 1], a_taps[0]))]
+        total = self._running_min(m, sums, read + 2, "sgm_left_u")
+        cost_min = self._running_min(m, costs[0], 0, "sgm_left_cmin")
+        # Cmin + P2 (Cmin at a fresh start), and that minus P1, once Cmin is complete.
+        complete = tree + rounds
+        capped = Signal(bits, name="sgm_left_capped", reset_less=True)
+        capped_p1 = Signal(signed(bits + 1), name="sgm_left_capped_p1", reset_less=True)
+        add_k = self._aligned(add_cp, scalars, complete, "sgm_left_k")
+        add_k1 = self._aligned(add_k1, scalars, complete, "sgm_left_k1")
+        with m.If(slots.first(complete)):
+            m.d.sync += [capped.eq(cost_min + add_k), capped_p1.eq(cost_min + add_k1)]
+        # m(x) and m(x) - P1, formed in the clock after U(x) is complete: `materialise` in
+        # the next position's slot. What the next position forms with them meanwhile
+        # still sees m(x - 1).
+        done = read + 2 + tree + rounds
+        minimum = Signal(bits, name="sgm_left_m", reset_less=True)
+        minimum_p1 = Signal(signed(plus_bits + 1), name="sgm_left_m_p1", reset_less=True)
+        bound = Signal(bound_bits, name="sgm_left_bound", reset_less=True)
+        previous_p1 = Signal(plus_bits, name="sgm_left_previous_p1", reset_less=True)
+        with m.If(slots.first(done - 1)):
+            m.d.sync += [bound.eq(capped + minimum), previous_p1.eq(minimum + p1)]
+        new, new_p1 = _next_minimum(total, bound, minimum, previous_p1, capped, capped_p1,
+                                    self._aligned(fresh, t.guide, done, "sgm_left_fresh_m"))
+        with m.If(slots.first(done) & self._valid_at(done)):
+            m.d.sync += [minimum.eq(new[:bits]), minimum_p1.eq(new_p1)]
+
+        # The terms of L(x, d) for the lanes of round j and for the first lane of round
+        # j + 1 (a clock newer in the same streams), registered at `materialise`.
+        at = materialise - 1
+        last = slots.round(at) == rounds - 1
+        add_cp, add_cpp, sub_e = (self._aligned(value, scalars, at, f"sgm_left_{name}")
+                                  for value, name in ((add_cp, "cp"), (add_cpp, "cpp"),
+                                                      (sub_e, "e")))
+        terms = []
+        for i in range(units + 1):
+            upper = i == units
+            c = costs[at - 1][0] if upper else costs[at][i]
+            a = a_taps[at - read - 2][0] if upper else a_taps[at - read - 1][i]
+            e, cpp = a - sub_e, c + add_cpp
+            if upper:
+                # The last round has no next one: a candidate that never wins.
+                e, cpp = Mux(last, above, e), Mux(last, ones, cpp)
+            terms.append((
+                _register(m, c + a, sum_bits, f"sgm_left_term_ca{i}"),
+                _register(m, e, e_shape, f"sgm_left_term_e{i}"),
+                # The next round's first lane is a neighbour only: its L + P1 is used.
+                Const(0) if upper else _register(m, c + add_cp, bits, f"sgm_left_term_cp{i}"),
+                _register(m, cpp, plus_bits, f"sgm_left_term_cpp{i}")))
+
+        # L(x, d) and L(x, d) + P1 from m(x - 1).
+        values, plus = [], []
+        for i, (ca, e, cp, cpp) in enumerate(terms):
+            value, value_p1 = _materialise(ca, e, cp, cpp, minimum, minimum_p1)
+            if i < units:
+                values.append(_register(m, value[:bits], bits, f"sgm_left_l{i}"))
+            plus.append(_register(m, value_p1[:plus_bits], plus_bits, f"sgm_left_lp{i}"))
+        # L + P1 of the previous round's last lane, for round j's first (none in round 0).
+        before = _register(m, Mux(slots.round(materialise) == 0, ones, plus[units - 1]),
+                           plus_bits, "sgm_left_lp_before")
+        neighbours = [before, *plus]
+        following = [_register(m, _minimum3(value, neighbours[i], neighbours[i + 2])[:bits],
+                               bits, f"sgm_left_next_a{i}") for i, value in enumerate(values)]
+        store.write(slots.round(materialise + 2), Cat(*following),
+                    self._valid_at(materialise + 2))
+        return values
+
+    def _row_paths(self, m, fresh, p2):
+        """L of top-left, top and top-right per lane, at ``timing.rows``.
+
+        Offsets after the input, for round j: the word addresses at 2 + j, the words out
+        of the block RAMs' output registers at 4 + j, the top-left word held from the
+        previous position beside them at 5 + j; the first lane of round j + 1 arrives a
+        clock later, so the candidates L + P1 are formed at 7 + j, their minimum at 8 + j,
+        the normalised step at 9 + j and L = C + step at 10 + j, which is written back to
+        the position's own column and goes into the minima.
+        """
+        p, t, slots = self.params, self.timing, self._slots
+        units, rounds, width, tree = p.per_round, p.rounds, p.width, t.tree
+        bits, p1 = p.path_cost_bits, p.p1
+        plus_bits = (p.max_cost + p.p2 + p1).bit_length()
+        ones = (1 << plus_bits) - 1
+        word_bits = units * bits
+        x = self.tag.x
+        last_column = x == width - 1
+
+        # Row addresses (x * R and, for top-right, (x + 1) * R), slot-aligned at 1.
+        depth = width * rounds
+        own = _register(m, x * rounds, range(depth), "sgm_row_base")
+        nxt = _register(m, Mux(last_column, 0, (x + 1) * rounds), range(depth),
+                        "sgm_row_base_next")
+        word_at = 4                 # address 2, read 3, the RAM's output register 4
+        normalise = word_at + 4     # newest word, + P1, minimum of three
+        assert t.rows == normalise + 2, "plan.SGM_ROW_CLOCKS counts the same steps"
+        memories, words = [], []
+        for name, base, shape in (("top", own, unsigned(2 * word_bits)),
+                                  ("top_right", nxt, unsigned(word_bits))):
+            memory = Memory(shape=shape, depth=depth, init=[], attrs={"no_rw_check": 1})
+            m.submodules[f"sgm_rows_{name}"] = memory
+            read, write = memory.read_port(domain="sync"), memory.write_port()
+            address = _register(m, base + slots.round(1), range(depth), f"sgm_{name}_address")
+            m.d.comb += read.addr.eq(address)
+            words.append(_register(m, read.data, shape, f"sgm_{name}_word"))
+            memories.append(write)
+        (top, top_left), top_right = _lanes(words[0], 2, word_bits), words[1]
+        # Top-left: the word the previous position read for its own column.
+        store = Store(m, "sgm_top_left_store", unsigned(word_bits), rounds)
+        held = store.read(slots.round(word_at))
+        store.write(slots.round(word_at), top_left, self._valid_at(word_at))
+        newest = {"top-left": _register(m, held, word_bits, "sgm_top_left_newest"),
+                  "top": _register(m, top, word_bits, "sgm_top_newest"),
+                  "top-right": _register(m, top_right, word_bits, "sgm_top_right_newest")}
+
+        minima, minima_write = self._row_minima(m, p2, normalise)
+        results = {}
+        for path in ROW_PATHS:
+            name = f"sgm_{path.replace('-', '_')}"
+            word = _lanes(newest[path], units, bits)                   # round j + 1 at 6 + j
+            current = _lanes(_register(m, newest[path], word_bits, f"{name}_current"),
+                             units, bits)                              # round j at 6 + j
+            plus = [_register(m, v + p1, plus_bits, f"{name}_p{i}") for i, v in
+                    enumerate(current)]                                # round j at 7 + j
+            values = [_register(m, v, bits, f"{name}_q{i}") for i, v in enumerate(current)]
+            # The neighbours across the round's edges, for round j at 7 + j: the previous
+            # round's last lane and the next round's first (none outside 0 .. D-1).
+            before = _register(m, Mux(slots.round(word_at + 2) == 0, ones, plus[units - 1]),
+                               plus_bits, f"{name}_p_before")
+            after = _register(m, Mux(slots.round(word_at + 2) == rounds - 1, ones,
+                                     word[0] + p1), plus_bits, f"{name}_p_after")
+            neighbours = [before, *plus, after]
+            best = [_register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
+                              f"{name}_best{i}") for i, v in enumerate(values)]
+            minimum, bound = minima[path]
+            step = [_register(m, _normalised(b, minimum, bound,
+                                             self._aligned(p2[path], t.guide, normalise,
+                                                           f"{name}_p2"),
+                                             self._aligned(fresh[path], t.guide, normalise,
+                                                           f"{name}_fresh")),
+                              bits_for(p.p2), f"{name}_step{i}") for i, b in enumerate(best)]
+            results[path] = [_register(m, c + s, bits, f"{name}_l{i}")
+                             for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
+
+        # L back into the rows' memories at the position's own column.
+        address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
+        m.d.sync += address.eq(self._aligned(own, 1, t.rows - 1, "sgm_rows_base")
+                               + slots.round(t.rows - 1))
+        for write, written in zip(memories, (Cat(*results["top"], *results["top-left"]),
+                                           Cat(*results["top-right"]))):
+            m.d.comb += [write.addr.eq(address), write.data.eq(written),
+                         write.en.eq(self._valid_at(t.rows))]
+        # Their minima, once the last round's running minimum is complete.
+        running = [self._running_min(m, results[path], t.rows,
+                                     f"sgm_{path.replace('-', '_')}_m") for path in ROW_PATHS]
+        m.d.comb += [
+            minima_write.addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),
+            minima_write.data.eq(Cat(*running)),
+            minima_write.en.eq(slots.first(t.minima) & self._valid_at(t.minima))]
+        return results
+
+    def _row_minima(self, m, p2, offset):
+        """Per path from above, m of its predecessor and m + P2, slot-aligned at ``offset``;
+        and the minima memory's write port.
+
+        One word of the three minima per column; position x reads column x + 1 (0 after
+        the last column, whose value is then the current row's first), a word top-right
+        uses at once, top a position later and top-left two positions later: registers
+        shifted in every slot with a position.
+        """
+        p, t, slots = self.params, self.timing, self._slots
+        bits = p.path_cost_bits
+        x = self.tag.x
+        memory = Memory(shape=unsigned(3 * bits), depth=p.width, init=[],
+                        attrs={"no_rw_check": 1})
+        m.submodules.sgm_minima = memory
+        read, write = memory.read_port(domain="sync"), memory.write_port()
+        m.d.comb += read.addr.eq(_register(m, Mux(x == p.width - 1, 0, x + 1),
+                                           range(p.width), "sgm_minima_address"))
+        word = dict(zip(ROW_PATHS, _lanes(_register(m, read.data, 3 * bits,
+                                                    "sgm_minima_word"), 3, bits)))
+        # Column x + 1 for top-right now; for top as column x of the next position; for
+        # top-left as column x - 1 two positions on.
+        used = {path: Signal(bits, name=f"sgm_m_{path.replace('-', '_')}", reset_less=True)
+                for path in ROW_PATHS}
+        top_next = Signal(bits, name="sgm_m_top_next", reset_less=True)
+        top_left_next = [Signal(bits, name=f"sgm_m_top_left_next{k}", reset_less=True)
+                         for k in range(2)]
+        with m.If(slots.first(3) & self._valid_at(3)):
+            m.d.sync += [used["top-right"].eq(word["top-right"]),
+                         used["top"].eq(top_next), top_next.eq(word["top"]),
+                         used["top-left"].eq(top_left_next[1]),
+                         top_left_next[1].eq(top_left_next[0]),
+                         top_left_next[0].eq(word["top-left"])]
+        result = {}
+        for path in ROW_PATHS:
+            name = f"sgm_{path.replace('-', '_')}"
+            bound = _register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
+                              bits + 1, f"{name}_bound")
+            result[path] = (self._aligned(used[path], 4, offset, f"{name}_m"),
+                            self._aligned(bound, 5, offset, f"{name}_bound"))
+        return result, write
