@@ -240,7 +240,7 @@ def test_unreachable_scheduler_is_one_line_within_10_s(capsys, tmp_path):
     ({"--transform": None}, "the grid is empty: --transform has no values"),
     ({"--block": "4"}, "block size must be an odd integer >= 3, not 4"),
     ({"--rounds": "3"}, "rounds must divide disparities (8), not 3"),
-    ({"--aggregation": "two"}, "aggregation size must be an odd integer >= 1, not 'two'"),
+    ({"--aggregation": "two"}, "aggregation must be an odd window size >= 1 or 'sgm', not 'two'"),
     ({"--pnr": True}, "--pnr places and routes ECP5 parts"),
     ({"--min-fps": "-1"}, "--min-fps must be a positive number"),
     ({"--workers": "0"}, "--workers must be an integer >= 1, not 0"),
@@ -272,10 +272,9 @@ def test_grid_order_and_aggregation_values_pass_through():
     assert len(chosen) == 16 and skipped == []
     assert chosen[0] == StereoParams(transform="rank", block=3, disparities=8, rounds=1,
                                      aggregation=1, width=32, height=8)
-    # A name is handed to StereoParams as given: today it is refused there, by name.
-    with pytest.raises(UserError, match="aggregation size must be an odd integer >= 1, "
-                                        "not 'sgm'"):
-        configurations(Grid(("rank",), (3,), (1,), ("sgm",), ("auto",), 8, 32, 8))
+    # "sgm" is handed to StereoParams as given: the SGM core with its default penalties.
+    sgm, skipped = configurations(Grid(("census",), (7,), (8,), ("sgm",), ("auto",), 16, 32, 8))
+    assert skipped == [] and [p.aggregation for p in sgm] == ["sgm"] and sgm[0].p2 == 79
 
 
 def _point(logic, correct, fits=True, fps=50.0, memory=100):
