@@ -12,6 +12,11 @@ masked from the tag, never from memory contents.
 
 The result is the aggregated cost S of the *centre* position, a rows and a columns behind
 the newest one.
+
+The units run skewed (:func:`~.plan.unit_skews`): unit i's costs arrive s_i clocks after
+unit 0's, and each unit's control (addresses, masks, write enables) is unit 0's handed on
+by a register per step of the skew, so no control signal fans out to every unit. At the
+end unit i's sums wait S - s_i clocks, and all units' sums leave together.
 """
 
 from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
@@ -20,7 +25,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
-from .plan import VERTICAL_CLOCKS, aggregation_latency, vertical_bits
+from .plan import VERTICAL_CLOCKS, aggregation_latency, unit_skews, vertical_bits
 from .trees import DEFAULT_EVERY, build_sum, register_plan
 
 __all__ = ["Aggregation"]
@@ -54,7 +59,7 @@ class Aggregation(wiring.Component):
     Attributes
     ----------
     costs : In(ArrayLayout(unsigned(bits), D/R))
-        Per unit, the newest position's cost (``stored_rows == "costs"``: one row, masked
+        Per unit, s_i clocks after ``tag`` (:func:`~.plan.unit_skews`), the newest position's cost (``stored_rows == "costs"``: one row, masked
         where x - d < 0 or outside the frame) or vertical sum (``"transforms"``).
     tag : In(tag_layout)
         The newest position, slot-aligned at this stage's input.
@@ -65,7 +70,7 @@ class Aggregation(wiring.Component):
     centre : Out(tag_layout)
         The aggregation window's centre, slot-aligned at the output.
     latency : int
-        Clocks from input to output.
+        Clocks from input (``tag``, unit 0's costs) to output.
     """
 
     def __init__(self, params, every=DEFAULT_EVERY):
@@ -74,8 +79,10 @@ class Aggregation(wiring.Component):
         self.from_costs = a > 0 and params.stored_rows == "costs"
         in_bits = params.cost_bits if a == 0 or self.from_costs else vertical_bits(params)
         self.vertical_latency = VERTICAL_CLOCKS if self.from_costs else 0
-        self.latency = aggregation_latency(params, every)
-        self.horizontal_latency = self.latency - self.vertical_latency
+        self.skews = unit_skews(params)
+        arithmetic = aggregation_latency(params, every)
+        self.horizontal_latency = arithmetic - self.vertical_latency
+        self.latency = arithmetic + self.skews[-1]
         units = params.per_round
         super().__init__({
             "costs": In(data.ArrayLayout(unsigned(in_bits), units)),
@@ -96,6 +103,10 @@ class Aggregation(wiring.Component):
             tag = slots.delay(tag, 0, self.vertical_latency, "vertical_tag")
         if p.agg_radius:
             values, tag = self._horizontal(m, slots, values, tag, self.vertical_latency)
+        last = self.skews[-1]
+        values = [pipe(m, v, last - skew, f"aligned_sum{i}")
+                  for i, (v, skew) in enumerate(zip(values, self.skews))]
+        tag = slots.delay(tag, self.latency - last, last, "aligned_centre")
         m.d.comb += [self.sums[i].eq(v) for i, v in enumerate(values)]
         m.d.comb += self.centre.eq(tag)
         return m
@@ -128,20 +139,23 @@ class Aggregation(wiring.Component):
                   for k, ok in enumerate(inside)]
         reading = slots.delay(tag.valid, 0, 2, "cost_lines_reading")
         written = slots.delay(reading, 2, 2, "cost_lines_written")
+        control = _Chain(m, self.skews, "cost_lines")
         sums = []
         for i, cost in enumerate(costs):
             m.submodules[f"cost_lines{i}"] = lines = Memory(
                 shape=unsigned(rows * bits), depth=p.width * rounds, init=[],
                 attrs={"no_rw_check": 1})
             read, write = lines.read_port(domain="sync"), lines.write_port()
-            m.d.comb += [read.addr.eq(address), read.en.eq(reading)]
+            unit_address, unit_reading, unit_written, *unit_inside = control.unit(
+                i, address, reading, written, *inside)
+            m.d.comb += [read.addr.eq(unit_address), read.en.eq(unit_reading)]
             stored_word = pipe(m, read.data, 1, f"cost_lines{i}_read")
             stored = [stored_word[k * bits:(k + 1) * bits] for k in range(rows)]
             newest = pipe(m, cost, 4, f"vertical_in{i}")
-            m.d.comb += [write.addr.eq(pipe(m, address, 2, f"cost_lines{i}_write_address")),
-                         write.en.eq(written),
+            m.d.comb += [write.addr.eq(pipe(m, unit_address, 2, f"cost_lines{i}_write_address")),
+                         write.en.eq(unit_written),
                          write.data.eq(Cat(newest, *stored[:rows - 1]))]
-            total = sum(Mux(ok, row, 0) for ok, row in zip(inside, [newest, *stored]))
+            total = sum(Mux(ok, row, 0) for ok, row in zip(unit_inside, [newest, *stored]))
             sums.append(pipe(m, total[:vertical_bits(p)], 1, f"vertical{i}"))
         return sums
 
@@ -161,17 +175,38 @@ class Aggregation(wiring.Component):
         # Tap k holds column x_newest - k, i.e. the centre's column + (a - k).
         keep = [Signal(name=f"column_ok{k}") for k in range(2 * a + 1)]
         m.d.sync += [ok.eq(_tap_inside(newest_x, k, a)) for k, ok in enumerate(keep)]
+        control = _Chain(m, self.skews, "row_taps")
         sums = []
         for i, value in enumerate(values):
+            valid, *unit_keep = control.unit(i, tag.valid, *keep)
             taps = Store(m, f"row_taps{i}", unsigned(2 * a * bits), rounds)
-            round_ = slots.phased_round(offset, i, f"row_taps{i}_address")
+            round_ = slots.phased_round(offset + self.skews[i], i, f"row_taps{i}_address")
             word = taps.read(round_)
             older = [word[k * bits:(k + 1) * bits] for k in range(2 * a)]
-            taps.write(round_, Cat(value, *older[:2 * a - 1]), tag.valid)
+            taps.write(round_, Cat(value, *older[:2 * a - 1]), valid)
             registered = pipe(m, Cat(value, *older), 1, f"row_taps{i}")
-            terms = [Mux(keep[k], registered[k * bits:(k + 1) * bits], 0)
+            terms = [Mux(unit_keep[k], registered[k * bits:(k + 1) * bits], 0)
                      for k in range(2 * a + 1)]
             total = build_sum(m, 1, terms, register_plan(len(terms), self.every, 0, True))
             sums.append(total[:p.aggregated_cost_bits])
         out_tag = slots.delay(centre, offset, self.horizontal_latency, "centre_tag")
         return sums, out_tag
+
+
+class _Chain:
+    """Unit 0's control signals, handed from unit to unit by a register per step of the
+    skew (units with the same skew share them)."""
+
+    def __init__(self, m, skews, name):
+        self.m, self.skews, self.name = m, skews, name
+        self.handed = {}
+
+    def unit(self, i, *signals):
+        """``signals`` (unit 0's) as unit i sees them, s_i clocks later."""
+        if i == 0 or self.skews[i] == self.skews[i - 1]:
+            values = self.handed.get(i - 1, list(signals)) if i else list(signals)
+        else:
+            values = [pipe(self.m, v, 1, f"{self.name}_unit{i}_{k}", reset=True)
+                      for k, v in enumerate(self.handed[i - 1])]
+        self.handed[i] = values
+        return values

@@ -33,7 +33,7 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import calculation_timing, cost_rows, min_tree_plan, vertical_bits
+from .plan import calculation_timing, cost_rows, min_tree_plan, unit_skews, vertical_bits
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
@@ -88,6 +88,8 @@ class CalculationStage(wiring.Component):
         # Offsets (clocks after the input) of the datapath's steps; see elaborate().
         self.transformed, self.stored = timing.transformed, timing.stored
         self.costed, self.vertical = timing.costed, timing.vertical
+        #: Clocks by which unit i runs behind unit 0 (:func:`~.plan.unit_skews`).
+        self.skews = unit_skews(params)
         self.sums_latency, self.min_latency = timing.sums, timing.min_tree
         self.latency = timing.latency
         units = params.per_round
@@ -113,12 +115,13 @@ class CalculationStage(wiring.Component):
                      tl.en.eq(1), tr.en.eq(1)]
         left, right = self._transformed_rows(m, slots, tl.value, tr.value)
         tag = slots.delay(self.tag, 0, self.transformed, "transformed_tag")
-        right_words = self._right_stores(m, slots, Cat(*right), tag)
-        # The left word reaches the cost units with the stores' read registers.
-        left_word = pipe(m, Cat(*left), 2, "left_word")
-        early = slots.delay(tag, self.transformed, self.stored - self.transformed, "stored_tag")
+        before = slots.delay(self.tag, 0, self.transformed - 1, "transformed_tag_ahead")
+        right_words = self._right_stores(m, slots, Cat(*right), tag, before)
+        left_words = self._left_chain(m, slots, Cat(*left))
+        early = slots.delay(tag, self.transformed, self.stored - self.transformed,
+                            "stored_tag")
         tag = slots.delay(early, self.stored, 1, "cost_tag")
-        costs = self._costs(m, slots, left_word, right_words, tag, early)
+        costs = self._costs(m, slots, left_words, right_words, tag, early)
 
         m.submodules.aggregation = aggregation = self.aggregation
         newest = slots.delay(tag, self.stored + 1, self.vertical - self.stored - 1,
@@ -173,94 +176,108 @@ class CalculationStage(wiring.Component):
                                        right, *right_above[:above - 1]))]
         return [left, *left_above], [right, *right_above]
 
-    def _right_stores(self, m, slots, newest, tag):
-        """Each unit's R right-image words; returns the units' read registers.
+    def _right_stores(self, m, slots, newest, tag, before):
+        """Each unit's R right-image words; returns the units' operand registers.
 
-        In round j unit i reads the word of column x - j*D/R - i (a register later it is
-        the unit's operand) and, in a slot with a position, writes it into unit i + 1 at
-        the same place for the next position (the LUT RAM's read is asynchronous, the
-        write lands at the clock edge). Unit 0 takes the last unit's word of round j as its
-        word j + 1, and in round R-1 the newest column as its word 0; so that this never
-        overwrites a word it has still to read, unit 0's words rotate by one place per
-        position. ``tag`` is slot-aligned at ``self.transformed``: the newest column's
-        slot, which begins in the clock after round R-1.
+        Unit i reads its word of round j (column x - j*D/R - i) at ``stored + s_i + j`` and
+        registers it as its operand; from that register the word is written into unit
+        i + 1, at the place unit i + 1 reads in round j, for the next position. With
+        s_(i+1) = s_i + 1 the write falls in the clock of that read (the LUT RAM's read is
+        asynchronous and sees the old word, the write lands at the clock edge); with equal
+        skews a clock later, at an address counter of its own a clock behind. Unit 0 takes
+        the last unit's word of round j as its word j + 1 (written S + 1 clocks after its
+        own read of that word and before the next position's), and the newest column as its
+        word 0, in the one clock of each slot that those R - 1 writes leave free: the
+        newest word's first clock, ``stored - (R - S)`` (see :func:`~.plan.calculation_timing`).
+        So every write comes from a register, and every wire runs between neighbours but
+        the one that closes the ring.
+
+        ``tag`` is slot-aligned at ``self.transformed``, ``before`` a clock earlier; with
+        R = 1 the stores are registers, nothing goes round and unit 0 takes the newest
+        word directly.
         """
         p = self.params
-        rounds, units, bits = p.rounds, p.per_round, len(newest)
-        last_round = slots.first(self.transformed)          # round R-1 of the stores
-        current = slots.delay(tag, self.transformed, 1, "store_tag")   # slot in its rounds
-        moving = current.valid
-        entering = last_round & tag.valid                   # the newest column comes in
-        if rounds == 1:
-            address0 = write0_enable = Const(0)
-        else:
-            # Unit 0's word j lives at (base + j) mod R; base steps back one place per
-            # position, so word j + 1 of the next position lands where word j was read,
-            # and in round R-1 the newest word lands on the next position's base. The
-            # address and the write enable reach the LUT RAM straight from registers
-            # (each drives a whole word of RAM cells), loaded a clock ahead.
-            base = Signal(range(rounds), name="store0_base")
-            address0 = Signal(range(rounds), name="store0_address")
-            write0_enable = Signal(name="store0_write")
-            stepped = Mux(base == 0, rounds - 1, base - 1)
-            following = Mux(moving, stepped, base)       # the next position's base
-            before_last = slots.first(self.transformed - 1)
-            coming = slots.delay(self.tag, 0, self.transformed - 1, "store_next_tag")
-            with m.If(last_round):
-                m.d.sync += base.eq(following)
-            with m.If(before_last | last_round):
-                m.d.sync += address0.eq(following)
-            with m.Else():
-                m.d.sync += address0.eq(Mux(address0 == rounds - 1, 0, address0 + 1))
-            m.d.sync += write0_enable.eq(Mux(before_last, coming.valid,
-                                             Mux(last_round, tag.valid, moving)))
-        # Units 1 .. D/R-1: each its own address counter and write enable, placed by its
-        # LUT RAM: one shared counter reached every RAM cell of every unit (census 9x9:
-        # 540 cells, 9.8 ns of routing on ECP5). Identical registers would be merged by
-        # synthesis, so unit i counts with phase i (its word j lives at (j + i) mod R, and
-        # a word passed on lands at the next unit's own address for the same round), and
-        # its enable includes a comparison with R that its counter never reaches. The
-        # enable is a register too, loaded a clock ahead (as a product of the counter it
-        # was two LUTs and 11 ns of routing in front of a unit's RAM cells, census 9x9).
-        addresses, enables = [address0], [write0_enable]
-        for i in range(1, units):
-            if rounds == 1:
-                addresses.append(Const(0))
-                enables.append(moving)
-                continue
-            counter = Signal(range(rounds + 1), name=f"store{i}_address")
-            following = Mux(last_round, i % rounds,
-                            Mux(counter == rounds - 1, 0, counter + 1))
-            enable = Signal(name=f"store{i}_write")
-            m.d.sync += [counter.eq(following), enable.eq(tag.valid & (following != rounds))]
-            addresses.append(counter)
-            enables.append(enable)
-        words, operands = [], []
-        stores = [Store(m, f"right_store{i}", unsigned(bits), rounds) for i in range(units)]
-        for i, store in enumerate(stores):
-            words.append(store.read(addresses[i]))
-            operands.append(pipe(m, words[-1], 1, f"right_operand{i}"))
-        for i, store in enumerate(stores):
-            if i:
-                store.write(addresses[i], words[i - 1], enables[i])
-            elif rounds == 1:
-                store.write(0, newest, entering)
+        rounds, units, skews, bits = p.rounds, p.per_round, self.skews, len(newest)
+        start = self.transformed
+        valid = _Aligned(m, slots, tag.valid, start, "store_valid")
+        stores = [Store(m, f"right_store{i}", unsigned(bits), rounds) if i or rounds > 1
+                  else None for i in range(units)]
+        counters = {}
+
+        def address(i, offset):
+            """Unit i's place for round j, ``offset + j`` clocks after the slot's start:
+            a counter of its own per (unit, offset), each near the RAM cells it drives.
+            Unit i keeps its word j at (j + i) mod R, which is as good as j for a store
+            read and written at the same round, and keeps synthesis from merging the
+            counters of units with the same timing."""
+            if (i, offset) not in counters:
+                counters[i, offset] = slots.phased_round(offset, i,
+                                                         f"store{i}_address{offset}")
+            return counters[i, offset]
+
+        reads, operands = [], []
+        for i in range(units):
+            at = self.stored + skews[i]
+            if stores[i] is None:          # R = 1: unit 0 reads the newest word itself
+                word = newest
             else:
-                store.write(address0, Mux(last_round, newest, words[-1]), write0_enable)
+                word = stores[i].read(address(i, at))
+            reads.append(word)
+            operands.append(pipe(m, word, 1, f"right_operand{i}"))
+        for i in range(1, units):
+            follows = skews[i] == skews[i - 1] + 1
+            if rounds == 1:
+                # Registers: with equal skews unit i - 1's word of this position is its
+                # register itself, a clock later only in its operand register.
+                source = operands[i - 1] if follows else reads[i - 1]
+                stores[i].write(0, source, valid.at(self.stored + skews[i]))
+                continue
+            at = self.stored + skews[i - 1] + 1
+            enable = Signal(name=f"store{i}_write")
+            m.d.sync += enable.eq(valid.at(at - 1))
+            stores[i].write(address(i, at), operands[i - 1], enable)
+        if rounds > 1:
+            # Unit 0: the newest word in the slot's first clock at the transforms, the last
+            # unit's words of rounds 0 .. R-2 in the R - 1 clocks after it, one slot later.
+            newest_now, enable = Signal(name="store0_newest"), Signal(name="store0_write")
+            previous = slots.delay(valid.at(start), start, rounds, "store0_previous_valid")
+            m.d.sync += [newest_now.eq(slots.first(start - 1)),
+                         enable.eq(Mux(slots.first(start - 1), before.valid, previous))]
+            stores[0].write(address(0, start), Mux(newest_now, newest, operands[-1]),
+                            enable)
         return operands
 
-    def _costs(self, m, slots, left_word, right_words, tag, early):
-        """Masked costs (or vertical sums of A rows) per unit, at offset ``self.vertical``.
+    def _left_chain(self, m, slots, newest):
+        """The left word of each unit, slot-aligned at its operand: a register per step of
+        the skew, handed from unit to unit; units with the same skew share one."""
+        delay = self.stored + 1 - self.transformed
+        if delay <= 2:
+            word = pipe(m, newest, delay, "left_word")
+        else:
+            word = slots.delay(newest, self.transformed, delay, "left_word", reset_less=True)
+        words = [word]
+        for i in range(1, self.params.per_round):
+            if self.skews[i] != self.skews[i - 1]:
+                word = pipe(m, word, 1, f"left_word{i}")
+            words.append(word)
+        return words
 
-        ``tag`` is slot-aligned at ``self.stored + 1``, where the operands are, ``early``
-        a clock before. A cost is 0 (Cmax for SGM) where x - d < 0, where its row lies
-        outside the frame, and in slots without a position.
+    def _costs(self, m, slots, left_words, right_words, tag, early):
+        """Masked costs (or vertical sums of A rows) per unit, at offset ``self.vertical``
+        (unit i s_i clocks later, except for SGM).
+
+        ``tag`` is slot-aligned at ``self.stored + 1``, where unit 0's operands are,
+        ``early`` a clock before; unit i works s_i clocks later, and its masks are delayed
+        with it. The box aggregation takes the units' costs skewed; for SGM unit i's
+        result waits S - s_i clocks, so that all units' results leave together. A cost is 0 (Cmax for SGM) where x - d < 0, where its row lies outside the
+        frame, and in slots without a position.
         """
         p = self.params
         start = self.stored + 1
         bits = p.transform_bits
         outside = _missing_cost(p)
-        units = p.per_round
+        units, skews = p.per_round, self.skews
+        last = skews[-1]
         # x - j*D/R once, then per unit x - d >= 0 <=> x - j*D/R >= i, for i < D/R: beyond
         # D/R every unit's pair exists, below it only the low bits decide (ten comparisons of
         # one signed word with constants were five LUT levels for census 9x9 on ECP5).
@@ -281,24 +298,52 @@ class CalculationStage(wiring.Component):
                 m.d.sync += ok.eq(tag.valid & tag.live)
             else:
                 m.d.sync += ok.eq(tag.valid & tag.live & (tag.y >= k) & (tag.y < p.height + k))
-            rows_ok.append(pipe(m, ok, self.costed - start - 1, f"cost_row_ok{k}"))
+            ok = pipe(m, ok, self.costed - start - 1, f"cost_row_ok{k}")
+            # One tap per skew: the chain of unit 0's flags, a register per step.
+            taps = [ok]
+            for step in range(last):
+                taps.append(pipe(m, taps[-1], 1, f"cost_row_ok{k}_skew{step + 1}"))
+            rows_ok.append(taps)
         masked = []
-        for i, units in enumerate(self.cost_units):
+        for i, units_of_row in enumerate(self.cost_units):
+            skew = skews[i]
             in_row = Signal(name=f"in_row{i}")
             # Unit 0 needs only x - j*D/R >= 0 (a constant comparison fails Verilator's lint).
             m.d.sync += in_row.eq(all_pairs | (some_pairs & (low >= i)) if i else some_pairs)
-            in_row = pipe(m, in_row, self.costed - start - 2, f"in_row{i}")
+            in_row = pipe(m, in_row, self.costed - start - 2 + skew, f"in_row{i}")
             row_costs = []
-            for k, unit in enumerate(units):
+            for k, unit in enumerate(units_of_row):
                 m.submodules[f"cost{i}_row{k}"] = unit
-                m.d.comb += [unit.left.eq(left_word[k * bits:(k + 1) * bits]),
+                m.d.comb += [unit.left.eq(left_words[i][k * bits:(k + 1) * bits]),
                              unit.right.eq(right_words[i][k * bits:(k + 1) * bits]),
                              unit.en.eq(1)]
                 cost = pipe(m, unit.cost, self.costed - start - unit.latency, f"cost{i}_{k}")
-                row_costs.append(Mux(in_row & rows_ok[k], cost, outside))
+                row_costs.append(Mux(in_row & rows_ok[k][skew], cost, outside))
             if self.rows > 1:
                 total = build_sum(m, 1, row_costs, register_plan(self.rows, self.every, 0, True))
-                masked.append(total[:vertical_bits(p)])
+                total = total[:vertical_bits(p)]
             else:
-                masked.append(pipe(m, row_costs[0], 1, f"masked_cost{i}"))
+                total = pipe(m, row_costs[0], 1, f"masked_cost{i}")
+            if p.is_sgm:
+                # SGM's lanes meet their neighbours: its input is re-aligned here. The box
+                # sum runs skewed and re-aligns its own sums.
+                total = pipe(m, total, last - skew, f"aligned_cost{i}")
+            masked.append(total)
         return masked
+
+
+class _Aligned:
+    """A slot-aligned value at any later offset, from one chain of latches
+    (:meth:`~.common.SlotClock.delay`) shared by all offsets asked for."""
+
+    def __init__(self, m, slots, value, start, name):
+        self.slots, self.name = slots, name
+        self.values = {start: value}
+
+    def at(self, offset):
+        """The value slot-aligned ``offset`` clocks after the slot's start."""
+        if offset not in self.values:
+            base = max(o for o in self.values if o < offset)
+            self.values[offset] = self.slots.delay(self.values[base], base, offset - base,
+                                                   self.name)
+        return self.values[offset]

@@ -21,7 +21,8 @@ from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan, tree_l
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_plan", "INPUT_LATENCY", "cost_rows",
-           "vertical_bits", "aggregation_latency", "CalculationTiming", "calculation_timing",
+           "vertical_bits", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
+           "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame", "Memory", "memories", "memory_bits", "SGM_LOOP_CLOCKS",
            "sgm_min_rounds", "SgmTiming", "sgm_timing", "sgm_memories"]
@@ -159,13 +160,37 @@ def aggregation_latency(params, every=DEFAULT_EVERY):
     return vertical + 1 + sum(register_plan(2 * a + 1, every, 0, True))
 
 
+#: Largest skew between the first and the last cost unit with R = 1 (see :func:`unit_skews`).
+MAX_SKEW_ONE_ROUND = 7
+
+
+def unit_skews(params):
+    """Clocks by which each cost unit runs behind unit 0: the units form a systolic chain.
+
+    Unit i takes its left operand from unit i - 1's register and its right-image words
+    from unit i - 1's operand register, so no operand is broadcast to all units and no
+    store's read feeds another store's write. Neighbouring units differ by 0 or 1 clock:
+    s_i = i S // (D/R - 1). With R >= 2 the last unit's words go round to unit 0 for its
+    next round, which needs S <= R - 1; with R = 1 nothing goes round, and S is kept small
+    (:data:`MAX_SKEW_ONE_ROUND`) because re-aligning the units' results costs
+    S - s_i registers per unit. Units with equal skew share their left operand.
+    """
+    units = params.per_round
+    if units == 1:
+        return (0,)
+    top = min(units - 1, params.rounds - 1 if params.rounds > 1 else MAX_SKEW_ONE_ROUND)
+    return tuple(i * top // (units - 1) for i in range(units))
+
+
 @dataclass(frozen=True)
 class CalculationTiming:
     """Offsets inside the calculation stage, in clocks after its input (the windows)."""
     transformed: int    #: transforms (and the rows above) of a position, slot-aligned
-    stored: int         #: round 0 of the right-transform stores' reads
-    costed: int         #: masked costs (row costs) of a round
-    vertical: int       #: costs or vertical sums at the aggregation's input
+    stored: int         #: round 0 of unit 0's right-transform store read
+    costed: int         #: masked costs (row costs) of a round, unit 0
+    skew: int           #: clocks the last unit runs behind unit 0 (see unit_skews)
+    vertical: int       #: unit 0's costs or vertical sums at the aggregation's input
+                        #: (SGM: all units', re-aligned)
     sums: int           #: aggregated sums of the aggregation centre
     min_tree: int       #: clocks of the partition's minimum tree
     latency: int        #: the partition winner (registered)
@@ -176,21 +201,30 @@ def calculation_timing(params, every=DEFAULT_EVERY):
 
     The transform units' results; with the rows above recomputed, the block RAM of
     transformed rows is read in round 0 and its word passes the RAM's output register, so
-    the current row waits for it (at least 2 clocks). The stores are read a clock after
-    the newest word is written; their read register precedes the cost units; the cost
-    masks take two registers (x - j*D/R, then one comparison per unit), so at least 3
-    clocks pass from the stores to the masked costs. With A rows the row costs are summed
-    (registered); a single row's cost is registered once.
+    the current row waits for it (at least 2 clocks). The newest right word is written into
+    unit 0's store in the one clock of a slot that the words coming round from the last
+    unit leave free, and unit 0 reads it R - S clocks later (S: the last unit's skew), so
+    with R >= 2 the stores are read R - S clocks after the transforms. Unit 0's read
+    register precedes its cost unit; the cost masks take two registers (x - j*D/R, then one
+    comparison per unit), so at least 3 clocks pass from the stores to the masked costs.
+    With A rows the row costs are summed (registered); a single row's cost is registered
+    once; then unit i's result waits S - s_i clocks for the last unit's: before SGM, or
+    after the box sum (:class:`~.aggregation.Aggregation`).
     """
     transform_latency = sum(transform_plan(params, every))
     rows = cost_rows(params)
-    transformed = max(transform_latency, 2) if rows > 1 else transform_latency
-    stored = transformed + 1
+    # At least a clock, so that unit 0's store write can be prepared a clock ahead.
+    transformed = max(transform_latency, 2 if rows > 1 else 1)
+    skew = unit_skews(params)[-1]
+    stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)
     costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
     vertical = costed + (sum(register_plan(rows, every, 0, True)) if rows > 1 else 1)
-    sums = vertical + aggregation_latency(params, every)
+    # SGM takes the units' results re-aligned; the box sum takes them skewed and
+    # re-aligns its own.
+    vertical += skew if params.is_sgm else 0
+    sums = vertical + aggregation_latency(params, every) + (0 if params.is_sgm else skew)
     min_tree = sum(min_tree_plan(params, every))
-    return CalculationTiming(transformed, stored, costed, vertical, sums, min_tree,
+    return CalculationTiming(transformed, stored, costed, skew, vertical, sums, min_tree,
                              sums + min_tree + 1)
 
 

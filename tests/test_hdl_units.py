@@ -444,8 +444,12 @@ def check_aggregation(params, seed, bubbles=0.3):
     clocks = [(slot, j) for slot in slots for j in range(rounds)]
     dut = Aggregation(params)
     latency = dut.latency
-    assert latency == plan.aggregation_latency(params)
+    skews = plan.unit_skews(params)
+    assert latency == plan.aggregation_latency(params) + skews[-1]
     got = {}
+    # The units' costs of each clock; unit i takes its own s_i clocks late (the skew of the
+    # cost units, :func:`npstereo.hdl.plan.unit_skews`).
+    given = []
 
     async def testbench(ctx):
         for t in range(len(clocks) + latency + rounds):
@@ -455,13 +459,14 @@ def check_aggregation(params, seed, bubbles=0.3):
             if slot is None:
                 ctx.set(dut.tag, {"x": stream.randrange(width), "y": stream.randrange(height),
                                   "valid": 0, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], stream.randrange(params.max_cost + 1))
+                given.append([stream.randrange(params.max_cost + 1) for i in range(units)])
             else:
                 frame, x, y = slot
                 ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], inputs(frame, x, y, j * units + i))
+                given.append([inputs(frame, x, y, j * units + i) for i in range(units)])
+            for i in range(units):
+                ctx.set(dut.costs[i], given[t - skews[i]][i] if t >= skews[i]
+                        else stream.randrange(params.max_cost + 1))
             if t >= latency:
                 centre = ctx.get(dut.centre)
                 out_round = clocks[t - latency][1] if t - latency < len(clocks) else None
