@@ -33,7 +33,7 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import calculation_timing, cost_rows, min_tree_plan, unit_skews, vertical_bits
+from .plan import calculation_timing, centre_copies, cost_rows, min_tree_plan, unit_skews, vertical_bits
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
@@ -60,6 +60,8 @@ class CalculationStage(wiring.Component):
     ----------
     window_left, window_right : In(ArrayLayout(unsigned(8), B * B))
         From the input stage, slot-aligned at this stage's input.
+    centres_left, centres_right : In(ArrayLayout(unsigned(8), copies))
+        Copies of the windows' centre (:func:`~.plan.centre_copies`), each its own register.
     tag : In(tag_layout)
         Centre of those windows.
     first, round : In
@@ -76,8 +78,9 @@ class CalculationStage(wiring.Component):
 
     def __init__(self, params, every=DEFAULT_EVERY):
         self.params, self.every = params, every
-        self.transform_left = Transform(params, every)
-        self.transform_right = Transform(params, every)
+        copies = centre_copies(params)
+        self.transform_left = Transform(params, every, copies)
+        self.transform_right = Transform(params, every, copies)
         a = params.agg_radius
         #: Rows whose costs the cost units compute: A with stored transforms, else 1.
         self.rows = cost_rows(params)
@@ -94,8 +97,10 @@ class CalculationStage(wiring.Component):
         self.latency = timing.latency
         units = params.per_round
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
+        centres = data.ArrayLayout(unsigned(8), copies)
         super().__init__({
             "window_left": In(window), "window_right": In(window),
+            "centres_left": In(centres), "centres_right": In(centres),
             "tag": In(tag_layout(params)),
             "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "sums": Out(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
@@ -113,6 +118,8 @@ class CalculationStage(wiring.Component):
         m.submodules.transform_right = tr = self.transform_right
         m.d.comb += [tl.window.eq(self.window_left), tr.window.eq(self.window_right),
                      tl.en.eq(1), tr.en.eq(1)]
+        if tl.impl.copies > 1:
+            m.d.comb += [tl.centres.eq(self.centres_left), tr.centres.eq(self.centres_right)]
         left, right = self._transformed_rows(m, slots, tl.value, tr.value)
         tag = slots.delay(self.tag, 0, self.transformed, "transformed_tag")
         before = slots.delay(self.tag, 0, self.transformed - 1, "transformed_tag_ahead")

@@ -160,6 +160,16 @@ class SlotClock:
                                         following))
         return counter
 
+    def private_first(self, offset, phase, name):
+        """Like :meth:`first`, but from a round counter of its own (:meth:`phased_round`).
+
+        For clock enables of register copies that must stay copies: copies loaded by the
+        same enable would be merged back into one register by synthesis.
+        """
+        if self.rounds == 1:
+            return Const(1)
+        return self.phased_round(offset, phase, name) == phase % self.rounds
+
     def delay(self, value, start, steps, name, reset_less=False):
         """A value slot-aligned at ``start`` moved ``steps`` clocks later.
 

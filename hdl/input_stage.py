@@ -22,7 +22,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, bits_for, column_inside, pipe, tag_layout, y_range
-from .plan import INPUT_LATENCY
+from .plan import INPUT_LATENCY, centre_copies
 
 __all__ = ["InputStage"]
 
@@ -68,6 +68,9 @@ class InputStage(wiring.Component):
     window_left, window_right : Out(ArrayLayout(unsigned(8), B * B))
         Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r), slot-aligned
         at offset ``latency``; they change only when a position is admitted.
+    centres_left, centres_right : Out(ArrayLayout(unsigned(8), copies))
+        Copies of the masked windows' centre pixel (:func:`~.plan.centre_copies`), each a
+        register of its own, slot-aligned with the windows.
     tag : Out(tag_layout)
         The windows' centre, slot-aligned at offset ``latency``.
     switch_pending : Out(1)
@@ -82,11 +85,13 @@ class InputStage(wiring.Component):
     def __init__(self, params):
         self.params = params
         window = data.ArrayLayout(unsigned(8), params.block * params.block)
+        centres = data.ArrayLayout(unsigned(8), centre_copies(params))
         super().__init__({
             "admit": In(1), "start": In(1), "overlap": In(1),
             "left": In(8), "right": In(8),
             "first": In(1), "round": In(bits_for(params.rounds - 1)),
             "window_left": Out(window), "window_right": Out(window),
+            "centres_left": Out(centres), "centres_right": Out(centres),
             "tag": Out(tag_layout(params)), "switch_pending": Out(1),
         })
 
@@ -144,6 +149,15 @@ class InputStage(wiring.Component):
             m.d.sync += masked.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
                                       for row in range(block) for c in range(block)))
             m.d.comb += window.eq(masked)
+            # The centre's copies take what the window register takes, in the clock the
+            # window shifts (the value then holds for the slot), each by an enable of its own.
+            centre = Mux(keep[r][r], columns[r][8 * r:8 * r + 8], 0)
+            copies = self.centres_left if name == "left" else self.centres_right
+            for k in range(len(copies)):
+                copy = Signal(8, name=f"{name}_centre{k}", reset_less=True)
+                with m.If(slots.private_first(LATENCY - 1, k, f"{name}_centre{k}_round")):
+                    m.d.sync += copy.eq(centre)
+                m.d.comb += copies[k].eq(copy)
 
         # The tag leaves with the masked window, a clock after the shift.
         m.d.comb += self.tag.eq(slots.delay(tag, LATENCY - 1, 1, "window_tag"))

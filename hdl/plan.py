@@ -20,7 +20,8 @@ from .common import tag_layout
 from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan, tree_levels
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
-           "transform_plan", "cost_plan", "min_tree_plan", "INPUT_LATENCY", "cost_rows",
+           "transform_plan", "cost_plan", "min_tree_plan", "CENTRE_FANOUT",
+           "centre_copies", "INPUT_LATENCY", "cost_rows",
            "vertical_bits", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
@@ -119,6 +120,23 @@ def min_tree_plan(params, every=DEFAULT_EVERY):
     every level (a level is a comparison whose result selects the whole (cost, index)
     pair; two of them do not fit a 150 MHz clock on ECP5)."""
     return register_plan(params.per_round, 1 if every else 0)
+
+
+#: Comparisons (or differences) with the window's centre that one copy of it feeds.
+CENTRE_FANOUT = 8
+
+
+def centre_copies(params):
+    """Copies of each window's centre pixel, one per :data:`CENTRE_FANOUT` neighbours.
+
+    The centre reaches all k comparisons (or differences) of a transform; as one register
+    that fan-out was 5 ns of routing on ECP5 (rank 7x7). Each copy is loaded by a clock
+    enable from a slot counter of its own, which keeps synthesis from merging the copies;
+    with R = 1 there is no slot to count, and one register it stays.
+    """
+    if params.rounds == 1:
+        return 1
+    return -(-params.neighbours // CENTRE_FANOUT)
 
 
 # Offsets of the stages ---------------------------------------------------------------------

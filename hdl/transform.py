@@ -42,44 +42,54 @@ class _WindowTransform(wiring.Component):
     every : int
         Register spacing in levels of logic (see :mod:`.trees`); 0 builds the transform
         combinationally (latency 0).
+    copies : int
+        Copies of the centre pixel the caller gives in ``centres`` (registers of their
+        own, see :func:`~.plan.centre_copies`); neighbour n is compared with copy
+        n * copies // k. With 1 the centre is taken from the window.
 
     Attributes
     ----------
     window : In(ArrayLayout(unsigned(8), B * B))
+    centres : In(ArrayLayout(unsigned(8), copies))
+        Only with ``copies`` > 1.
     en : In(1)
     value : Out(unsigned(params.transform_bits))
     latency : int
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY):
-        self.params = params
+    def __init__(self, params, every=DEFAULT_EVERY, copies=1):
+        self.params, self.copies = params, copies
         #: Register plan (:func:`~.plan.transform_plan`): where the registers go.
         self.plan = transform_plan(params, every)
         self.latency = sum(self.plan)
-        super().__init__({
-            "window": In(data.ArrayLayout(unsigned(8), params.block * params.block)),
-            "en": In(1),
-            "value": Out(unsigned(params.transform_bits)),
-        })
+        members = {"window": In(data.ArrayLayout(unsigned(8), params.block * params.block))}
+        if copies > 1:
+            members["centres"] = In(data.ArrayLayout(unsigned(8), copies))
+        super().__init__({**members, "en": In(1),
+                          "value": Out(unsigned(params.transform_bits))})
 
-    def _centre_and_neighbours(self):
-        block, r = self.params.block, self.params.radius
+    def _centres_and_neighbours(self):
+        """Per neighbour (in order) the centre copy it is compared with, and the
+        neighbours."""
+        block, r, k = self.params.block, self.params.radius, self.params.neighbours
         centre_index = r * block + r
         neighbours = [self.window[i] for i in range(block * block) if i != centre_index]
-        return self.window[centre_index], neighbours
+        if self.copies == 1:
+            return [self.window[centre_index]] * k, neighbours
+        return [self.centres[n * self.copies // k] for n in range(k)], neighbours
 
     def elaborate(self, platform):
         m = Module()
-        centre, neighbours = self._centre_and_neighbours()
-        m.d.comb += self.value.eq(self._value(m, centre, neighbours))
+        centres, neighbours = self._centres_and_neighbours()
+        m.d.comb += self.value.eq(self._value(m, centres, neighbours))
         return m
 
 
 class Rank(_WindowTransform):
     """Eq. 2: number of neighbours darker than the centre (compares, then a popcount)."""
 
-    def _value(self, m, centre, neighbours):
-        compared = Cat(xi(centre, p) for p in neighbours)
+    def _value(self, m, centres, neighbours):
+        compared = Cat(xi(c, p) for c, p in zip(centres, neighbours))
         if self.plan[0]:
             compared = delay(m, self.en, compared, 1, "rank_compared")
         return build_popcount(m, self.en, [compared[n] for n in range(len(neighbours))],
@@ -89,24 +99,25 @@ class Rank(_WindowTransform):
 class Census(_WindowTransform):
     """Eq. 4: bit n is the comparison with neighbour n (then the output register)."""
 
-    def _value(self, m, centre, neighbours):
-        return delay(m, self.en, Cat(xi(centre, p) for p in neighbours), self.latency,
-                     "census")
+    def _value(self, m, centres, neighbours):
+        return delay(m, self.en, Cat(xi(c, p) for c, p in zip(centres, neighbours)),
+                     self.latency, "census")
 
 
 class ExtRank(_WindowTransform):
     """Eq. 7: sum of |P - P'| over the neighbours (differences, then an adder tree)."""
 
-    def _value(self, m, centre, neighbours):
-        total = build_sad(m, self.en, [(centre, p) for p in neighbours], self.plan)
+    def _value(self, m, centres, neighbours):
+        total = build_sad(m, self.en, list(zip(centres, neighbours)), self.plan)
         return total[:self.params.transform_bits]
 
 
 class ExtCensus(_WindowTransform):
     """Eq. 8: byte n (bits 8n+7..8n) is |P - P'_n| (then the output register)."""
 
-    def _value(self, m, centre, neighbours):
-        return delay(m, self.en, Cat(absolute_difference(centre, p) for p in neighbours),
+    def _value(self, m, centres, neighbours):
+        return delay(m, self.en, Cat(absolute_difference(c, p)
+                                     for c, p in zip(centres, neighbours)),
                      self.latency, "ext_census")
 
 
@@ -126,9 +137,9 @@ class Transform(wiring.Component):
         Register spacing in levels of logic; 0 for a combinational transform.
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY):
+    def __init__(self, params, every=DEFAULT_EVERY, copies=1):
         self.params = params
-        self.impl = _TRANSFORMS[params.transform](params, every)
+        self.impl = _TRANSFORMS[params.transform](params, every, copies)
         self.latency = self.impl.latency
         super().__init__(self.impl.signature)
 
@@ -140,4 +151,6 @@ class Transform(wiring.Component):
             self.impl.en.eq(self.en),
             self.value.eq(self.impl.value),
         ]
+        if self.impl.copies > 1:
+            m.d.comb += self.impl.centres.eq(self.centres)
         return m
