@@ -33,7 +33,8 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import calculation_timing, centre_copies, cost_rows, min_tree_plan, unit_skews, vertical_bits
+from .plan import (calculation_timing, centre_copies, cost_rows, min_tree_plan, store_slices,
+                   unit_skews, vertical_bits)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
@@ -199,59 +200,76 @@ class CalculationStage(wiring.Component):
         So every write comes from a register, and every wire runs between neighbours but
         the one that closes the ring.
 
+        A store is cut into slices (:func:`~.plan.store_slices`), each with its own address
+        counters, write enable and (unit 0) select, so that no register drives more than a
+        slice's RAM cells; a slice's enable includes its counter's ``!= R``, which never
+        fails but keeps synthesis from merging the slices' enables.
+
         ``tag`` is slot-aligned at ``self.transformed``, ``before`` a clock earlier; with
         R = 1 the stores are registers, nothing goes round and unit 0 takes the newest
         word directly.
         """
         p = self.params
-        rounds, units, skews, bits = p.rounds, p.per_round, self.skews, len(newest)
+        rounds, units, skews = p.rounds, p.per_round, self.skews
         start = self.transformed
         valid = _Aligned(m, slots, tag.valid, start, "store_valid")
-        stores = [Store(m, f"right_store{i}", unsigned(bits), rounds) if i or rounds > 1
-                  else None for i in range(units)]
+        bounds, low = [], 0
+        for width in store_slices(len(newest)):
+            bounds.append((low, low + width))
+            low += width
         counters = {}
 
-        def address(i, offset):
-            """Unit i's place for round j, ``offset + j`` clocks after the slot's start:
-            a counter of its own per (unit, offset), each near the RAM cells it drives.
-            Unit i keeps its word j at (j + i) mod R, which is as good as j for a store
-            read and written at the same round, and keeps synthesis from merging the
-            counters of units with the same timing."""
-            if (i, offset) not in counters:
-                counters[i, offset] = slots.phased_round(offset, i,
-                                                         f"store{i}_address{offset}")
-            return counters[i, offset]
+        def address(i, offset, g):
+            """Slice g of unit i: its place for round j, ``offset + j`` clocks after the
+            slot's start. Unit i keeps its word j at (j + i) mod R, which is as good as j
+            for a store read and written at the same round."""
+            if (i, offset, g) not in counters:
+                counters[i, offset, g] = slots.phased_round(offset, i,
+                                                            f"store{i}_{g}_address{offset}")
+            return counters[i, offset, g]
 
-        reads, operands = [], []
+        operands, reads = [], []
         for i in range(units):
             at = self.stored + skews[i]
-            if stores[i] is None:          # R = 1: unit 0 reads the newest word itself
+            if i == 0 and rounds == 1:         # unit 0 reads the newest word itself
                 word = newest
+                stores = None
             else:
-                word = stores[i].read(address(i, at))
-            reads.append(word)
+                stores = [Store(m, f"right_store{i}_{g}", unsigned(high - low), rounds)
+                          for g, (low, high) in enumerate(bounds)]
+                word = Cat(store.read(address(i, at, g)) for g, store in enumerate(stores))
+            reads.append((word, stores))
             operands.append(pipe(m, word, 1, f"right_operand{i}"))
         for i in range(1, units):
+            stores = reads[i][1]
             follows = skews[i] == skews[i - 1] + 1
-            if rounds == 1:
-                # Registers: with equal skews unit i - 1's word of this position is its
-                # register itself, a clock later only in its operand register.
-                source = operands[i - 1] if follows else reads[i - 1]
-                stores[i].write(0, source, valid.at(self.stored + skews[i]))
-                continue
-            at = self.stored + skews[i - 1] + 1
-            enable = Signal(name=f"store{i}_write")
-            m.d.sync += enable.eq(valid.at(at - 1))
-            stores[i].write(address(i, at), operands[i - 1], enable)
+            for g, (low, high) in enumerate(bounds):
+                if rounds == 1:
+                    # Registers: with equal skews unit i - 1's word of this position is its
+                    # register itself, a clock later only in its operand register.
+                    source = operands[i - 1] if follows else reads[i - 1][0]
+                    stores[g].write(0, source[low:high], valid.at(self.stored + skews[i]))
+                    continue
+                at = self.stored + skews[i - 1] + 1
+                place = address(i, at, g)
+                enable = Signal(name=f"store{i}_{g}_write")
+                m.d.sync += enable.eq(valid.at(at - 1) & (place != rounds))
+                stores[g].write(place, operands[i - 1][low:high], enable)
         if rounds > 1:
             # Unit 0: the newest word in the slot's first clock at the transforms, the last
             # unit's words of rounds 0 .. R-2 in the R - 1 clocks after it, one slot later.
-            newest_now, enable = Signal(name="store0_newest"), Signal(name="store0_write")
             previous = slots.delay(valid.at(start), start, rounds, "store0_previous_valid")
-            m.d.sync += [newest_now.eq(slots.first(start - 1)),
-                         enable.eq(Mux(slots.first(start - 1), before.valid, previous))]
-            stores[0].write(address(0, start), Mux(newest_now, newest, operands[-1]),
-                            enable)
+            for g, (low, high) in enumerate(bounds):
+                place = address(0, start, g)
+                # place == R - 1 a clock before the slot's first clock at the transforms
+                # (where it is 0): registered, the select and enable of that clock.
+                coming = place == rounds - 1
+                newest_now = Signal(name=f"store0_{g}_newest")
+                enable = Signal(name=f"store0_{g}_write")
+                m.d.sync += [newest_now.eq(coming),
+                             enable.eq(Mux(coming, before.valid, previous))]
+                reads[0][1][g].write(place, Mux(newest_now, newest[low:high],
+                                                operands[-1][low:high]), enable)
         return operands
 
     def _left_chain(self, m, slots, newest):
@@ -327,7 +345,9 @@ class CalculationStage(wiring.Component):
                 cost = pipe(m, unit.cost, self.costed - start - unit.latency, f"cost{i}_{k}")
                 row_costs.append(Mux(in_row & rows_ok[k][skew], cost, outside))
             if self.rows > 1:
-                total = build_sum(m, 1, row_costs, register_plan(self.rows, self.every, 0, True))
+                # The masks are a level of logic in front of the adders (rank 7x7 on ECP5:
+                # a mask and two carry chains were 7.9 ns).
+                total = build_sum(m, 1, row_costs, register_plan(self.rows, self.every, 1, True))
                 total = total[:vertical_bits(p)]
             else:
                 total = pipe(m, row_costs[0], 1, f"masked_cost{i}")

@@ -154,7 +154,9 @@ class SlotClock:
         """
         if self.rounds == 1:
             return Const(0)
-        counter = Signal(range(self.rounds), name=name)
+        # One value more than it counts to: ``counter != R`` is then no constant, and
+        # ANDed into an enable it keeps that enable a register of its own.
+        counter = Signal(range(self.rounds + 1), name=name)
         following = Mux(counter == self.rounds - 1, 0, counter + 1)
         self.m.d.sync += counter.eq(Mux(self.first(offset - 1), phase % self.rounds,
                                         following))

@@ -21,7 +21,7 @@ from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan, tree_l
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_plan", "CENTRE_FANOUT",
-           "centre_copies", "INPUT_LATENCY", "cost_rows",
+           "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
            "vertical_bits", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
@@ -139,6 +139,19 @@ def centre_copies(params):
     return -(-params.neighbours // CENTRE_FANOUT)
 
 
+#: Widest slice of a right-transform store with address counters of its own: an address
+#: register driving a whole store (census 9x9: 60 LUT RAM cells) was 7 ns of routing on
+#: ECP5.
+STORE_SLICE_BITS = 32
+
+
+def store_slices(width):
+    """Widths of the slices a store word of ``width`` bits is cut into: as equal as can
+    be, none wider than :data:`STORE_SLICE_BITS`."""
+    count = -(-width // STORE_SLICE_BITS)
+    return [width // count + (k < width % count) for k in range(count)]
+
+
 # Offsets of the stages ---------------------------------------------------------------------
 
 #: Clocks from the admission of a pixel to the window: the line buffers' block RAM read,
@@ -236,7 +249,7 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     skew = unit_skews(params)[-1]
     stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)
     costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
-    vertical = costed + (sum(register_plan(rows, every, 0, True)) if rows > 1 else 1)
+    vertical = costed + (sum(register_plan(rows, every, 1, True)) if rows > 1 else 1)
     # SGM takes the units' results re-aligned; the box sum takes them skewed and
     # re-aligns its own.
     vertical += skew if params.is_sgm else 0
@@ -362,7 +375,10 @@ def memories(params, every=DEFAULT_EVERY):
     if p.is_sgm:
         result += sgm_memories(p)
     if rounds > 1:
-        result.append(Memory("right-transform stores", units, rounds, rows * p.transform_bits))
+        widths = store_slices(rows * p.transform_bits)
+        for width in sorted(set(widths)):
+            result.append(Memory("right-transform stores", units * widths.count(width), rounds,
+                                 width))
         if a:
             result.append(Memory("row taps", units, rounds, 2 * a * vertical_bits(p)))
     if p.lr_check:
