@@ -25,7 +25,8 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
-from .plan import VERTICAL_CLOCKS, aggregation_latency, unit_skews, vertical_bits
+from .plan import (aggregation_latency, horizontal_plan, unit_skews, vertical_bits,
+                   vertical_clocks, vertical_plan)
 from .trees import DEFAULT_EVERY, build_sum, register_plan
 
 __all__ = ["Aggregation"]
@@ -78,7 +79,7 @@ class Aggregation(wiring.Component):
         a = params.agg_radius
         self.from_costs = a > 0 and params.stored_rows == "costs"
         in_bits = params.cost_bits if a == 0 or self.from_costs else vertical_bits(params)
-        self.vertical_latency = VERTICAL_CLOCKS if self.from_costs else 0
+        self.vertical_latency = vertical_clocks(params, every)
         self.skews = unit_skews(params)
         arithmetic = aggregation_latency(params, every)
         self.horizontal_latency = arithmetic - self.vertical_latency
@@ -155,8 +156,10 @@ class Aggregation(wiring.Component):
             m.d.comb += [write.addr.eq(pipe(m, unit_address, 2, f"cost_lines{i}_write_address")),
                          write.en.eq(unit_written),
                          write.data.eq(Cat(newest, *stored[:rows - 1]))]
-            total = sum(Mux(ok, row, 0) for ok, row in zip(unit_inside, [newest, *stored]))
-            sums.append(pipe(m, total[:vertical_bits(p)], 1, f"vertical{i}"))
+            terms = [Mux(ok, row, 0) for ok, row in zip(unit_inside, [newest, *stored])]
+            # The masks are a level of logic in front of the adders.
+            total = build_sum(m, 1, terms, vertical_plan(p, self.every))
+            sums.append(total[:vertical_bits(p)])
         return sums
 
     def _horizontal(self, m, slots, values, tag, offset):
@@ -187,7 +190,7 @@ class Aggregation(wiring.Component):
             registered = pipe(m, Cat(value, *older), 1, f"row_taps{i}")
             terms = [Mux(unit_keep[k], registered[k * bits:(k + 1) * bits], 0)
                      for k in range(2 * a + 1)]
-            total = build_sum(m, 1, terms, register_plan(len(terms), self.every, 0, True))
+            total = build_sum(m, 1, terms, horizontal_plan(p, self.every))
             sums.append(total[:p.aggregated_cost_bits])
         out_tag = slots.delay(centre, offset, self.horizontal_latency, "centre_tag")
         return sums, out_tag

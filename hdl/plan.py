@@ -22,7 +22,8 @@ from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan, tree_l
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_plan", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
-           "vertical_bits", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
+           "vertical_bits", "VERTICAL_READ", "vertical_plan", "horizontal_plan",
+           "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame", "Memory", "memories", "memory_bits", "SGM_LOOP_CLOCKS",
@@ -170,9 +171,28 @@ def vertical_bits(params):
     return (params.max_cost * params.aggregation).bit_length()
 
 
-#: Clocks of the vertical sum from stored costs: the address register, the block RAM read,
-#: its output register, the adders' register, then one more register.
-VERTICAL_CLOCKS = 5
+#: Clocks until the rows of a vertical sum from stored costs are there: the address
+#: register, the block RAM read, its output register, then the read register.
+VERTICAL_READ = 4
+
+
+def vertical_plan(params, every=DEFAULT_EVERY):
+    """Register plan of the vertical sum of A stored costs; their masks are a level of
+    logic in front of the adders."""
+    return register_plan(params.aggregation, every, 1, True)
+
+
+def horizontal_plan(params, every=DEFAULT_EVERY):
+    """Register plan of the horizontal sum of 2a + 1 vertical sums; their masks are a
+    level of logic in front of the adders."""
+    return register_plan(2 * params.agg_radius + 1, every, 1, True)
+
+
+def vertical_clocks(params, every=DEFAULT_EVERY):
+    """Clocks of the vertical sum from stored costs (``stored_rows == "costs"``), else 0."""
+    if not params.agg_radius or params.stored_rows != "costs":
+        return 0
+    return VERTICAL_READ + sum(vertical_plan(params, every))
 
 
 def aggregation_latency(params, every=DEFAULT_EVERY):
@@ -180,15 +200,14 @@ def aggregation_latency(params, every=DEFAULT_EVERY):
     summed path costs of semi-global aggregation (:func:`sgm_timing`).
 
     The vertical sum from stored costs (``stored_rows == "costs"``), then the horizontal
-    sum: the registered taps, then the tree of 2a + 1 terms.
+    sum: the registered taps, then the tree of 2a + 1 terms. (The units' skew comes on
+    top, see :func:`calculation_timing`.)
     """
     if params.is_sgm:
         return sgm_timing(params, every).latency
-    a = params.agg_radius
-    if not a:
+    if not params.agg_radius:
         return 0
-    vertical = VERTICAL_CLOCKS if params.stored_rows == "costs" else 0
-    return vertical + 1 + sum(register_plan(2 * a + 1, every, 0, True))
+    return vertical_clocks(params, every) + 1 + sum(horizontal_plan(params, every))
 
 
 #: Largest skew between the first and the last cost unit with R = 1 (see :func:`unit_skews`).
