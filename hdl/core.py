@@ -115,29 +115,25 @@ class NpStereoCore(wiring.Component):
         m.d.sync += first.eq(round_ == rounds - 1)
         slots = SlotClock(m, first, round_, rounds, "core")
 
-        # Input: two two-entry register queues in a row (s_axis_tready straight from a
-        # register). The first one takes the ports, the second one feeds the admission:
-        # registers that take the ports are placed near the pins, and the admission's pop
-        # reaching them there was the longest path of census 9x9 on ECP5 (12.5 ns, two LUT
-        # levels, the rest routing).
+        # Input: the pins reach one register without an enable and nothing else (registers
+        # fed by pins are placed by the pins; an enable computed inside the core had to
+        # travel there: census 9x9, 8.8 ns of routing on ECP5). Behind it a queue of
+        # INPUT_QUEUE register entries addressed by pointers: a push writes one entry, a
+        # pop only steps the read pointer, so the admission's decision reaches two
+        # flip-flops, not the enables of every entry (a shifting queue's pop was 8.2 ns,
+        # census 9x9). s_axis_tready leaves room for the beat in the capture register and
+        # the one the port may deliver in this clock.
         beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
         incoming = Signal(beat)
         m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
                      incoming.last.eq(self.s_axis_tlast)]
-        pop, port_pop, admission_ready = Signal(), Signal(), Signal()
-        # The input pins reach one register without an enable and nothing else: registers
-        # fed by pins are placed by the pins, and an enable computed inside the core had to
-        # travel there (census 9x9: 8.8 ns of routing on ECP5). The queue behind it has
-        # room for the beat in that register whenever tready is given.
+        pop = Signal()
         captured, captured_valid = Signal.like(incoming, name="in_capture"), Signal()
         m.d.sync += [captured.eq(incoming),
                      captured_valid.eq(self.s_axis_tvalid & self.s_axis_tready)]
-        port_head, port_valid, port_level = _queue(m, "in_port", captured, captured_valid,
-                                                   port_pop, Signal(), depth=3)
-        m.d.comb += [self.s_axis_tready.eq(port_level + captured_valid <= 2),
-                     port_pop.eq(port_valid & admission_ready)]
-        head, head_valid, _ = _queue(m, "in_queue", port_head, port_valid, pop,
-                                     admission_ready)
+        head, head_valid, level = _fifo(m, "in_queue", captured, captured_valid, pop,
+                                        INPUT_QUEUE)
+        m.d.comb += self.s_axis_tready.eq(level + captured_valid <= INPUT_QUEUE - 1)
 
         # Output: the queue of words, and the credits of positions it can still take.
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
@@ -346,6 +342,40 @@ def _has_room(credits):
     """Whether the output queue is sure to take the word of one more position in the next
     clock: at most one credit is taken per clock, so two now leave at least one then."""
     return credits >= 2
+
+
+#: Entries of the input queue (a power of two: its pointers wrap by themselves).
+INPUT_QUEUE = 4
+
+
+def _fifo(m, name, incoming, push, pop, depth):
+    """A queue of ``depth`` registers (a power of two) addressed by pointers; returns
+    ``(head, valid, level)``.
+
+    ``push`` writes ``incoming`` (the caller keeps the queue from overflowing), ``pop``
+    drops the head (only when ``valid``). ``head`` is the entry at the read pointer,
+    ``valid`` a register of its own ("not empty"), ``level`` the entries held.
+    """
+    entries = [Signal.like(incoming, name=f"{name}{i}") for i in range(depth)]
+    write, read = Signal(range(depth), name=f"{name}_write"), Signal(range(depth),
+                                                                       name=f"{name}_read")
+    level = Signal(range(depth + 1), name=f"{name}_level")
+    valid = Signal(name=f"{name}_valid")
+    following = level + push - pop
+    m.d.sync += [level.eq(following), valid.eq(following != 0)]
+    with m.If(push):
+        m.d.sync += write.eq(write + 1)
+    with m.If(pop):
+        m.d.sync += read.eq(read + 1)
+    for k, entry in enumerate(entries):
+        with m.If(push & (write == k)):
+            m.d.sync += entry.eq(incoming)
+    head = Signal.like(incoming, name=f"{name}_head")
+    with m.Switch(read):
+        for k, entry in enumerate(entries):
+            with m.Case(k):
+                m.d.comb += head.eq(entry)
+    return head, valid, level
 
 
 def _queue(m, name, incoming, push_valid, pop, ready, depth=2):
