@@ -121,8 +121,8 @@ class NpStereoCore(wiring.Component):
         # INPUT_QUEUE register entries addressed by pointers: a push writes one entry, a
         # pop only steps the read pointer, so the admission's decision reaches two
         # flip-flops, not the enables of every entry (a shifting queue's pop was 8.2 ns,
-        # census 9x9). s_axis_tready leaves room for the beat in the capture register and
-        # the one the port may deliver in this clock.
+        # census 9x9). s_axis_tready leaves room for the beats in the capture and staging
+        # registers and the one the port may deliver in this clock.
         beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
         incoming = Signal(beat)
         m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
@@ -131,9 +131,15 @@ class NpStereoCore(wiring.Component):
         captured, captured_valid = Signal.like(incoming, name="in_capture"), Signal()
         m.d.sync += [captured.eq(incoming),
                      captured_valid.eq(self.s_axis_tvalid & self.s_axis_tready)]
-        head, head_valid, level = _fifo(m, "in_queue", captured, captured_valid, pop,
+        # A second plain register between the pins and the queue: the queue's write
+        # pointer reached the enables of its entries across the way to the pins
+        # (ext. rank 7x7: 8.1 ns, one LUT).
+        staged, staged_valid = Signal.like(incoming, name="in_staged"), Signal()
+        m.d.sync += [staged.eq(captured), staged_valid.eq(captured_valid)]
+        head, head_valid, level = _fifo(m, "in_queue", staged, staged_valid, pop,
                                         INPUT_QUEUE)
-        m.d.comb += self.s_axis_tready.eq(level + captured_valid <= INPUT_QUEUE - 1)
+        m.d.comb += self.s_axis_tready.eq(level + captured_valid + staged_valid
+                                          <= INPUT_QUEUE - 1)
 
         # Output: the queue of words, and the credits of positions it can still take.
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
