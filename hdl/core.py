@@ -291,10 +291,13 @@ class NpStereoCore(wiring.Component):
             m.d.comb += chosen.eq(proposed)
         else:
             # Loaded in round R-2 (a clock enable, no logic) and used only in round R-1.
+            # Registered as the proposal in round R-2 and as nothing in every other
+            # round, so the register itself is the decision of round R-1: no slot pulse
+            # and no multiplexer between it and what it drives (ext. rank 7x7 on ECP5:
+            # 7.6 ns from the slot pulse through the decision to the row flags).
             latched = Signal(proposal, name="proposal")
-            with m.If(slots.first(rounds - 2)):
-                m.d.sync += latched.eq(proposed)
-            m.d.comb += chosen.eq(Mux(slots.first(rounds - 1), latched, 0))
+            m.d.sync += latched.eq(Mux(slots.first(rounds - 2), proposed, 0))
+            m.d.comb += chosen.eq(latched)
         take = chosen.take        # the admitted position is the head pixel (else zeros)
         start, overlap = chosen.start, chosen.overlap
         error = Signal()
@@ -303,6 +306,16 @@ class NpStereoCore(wiring.Component):
         with m.If(chosen.change):
             m.d.sync += state.eq(chosen.state)
 
+        # The comparisons the counters' flags need, registered: the row changes only at
+        # line ends (W > 2 positions apart), the column once per slot (R clocks apart), so
+        # a flag a clock late is in time; with R = 1 the column's is compared at once.
+        second_last_row = Signal(name="second_last_row")
+        m.d.sync += second_last_row.eq(row == height - 2)
+        if rounds > 1:
+            second_last_column = Signal(name="second_last_column")
+            m.d.sync += second_last_column.eq(column == width - 2)
+        else:
+            second_last_column = column == width - 2
         with m.If(admit):
             with m.If(start):
                 m.d.sync += [column.eq(1), row.eq(0), line_start.eq(0),
@@ -310,10 +323,10 @@ class NpStereoCore(wiring.Component):
             with m.Else():
                 m.d.sync += [column.eq(Mux(end_of_line, 0, column + 1)),
                              line_start.eq(end_of_line),
-                             end_of_line.eq(~end_of_line & (column == width - 2))]
+                             end_of_line.eq(~end_of_line & second_last_column)]
                 with m.If(end_of_line):
                     m.d.sync += [row.eq(Mux(end_of_frame, 0, row + 1)),
-                                 last_row.eq(~end_of_frame & (row == height - 2))]
+                                 last_row.eq(~end_of_frame & second_last_row)]
 
         m.d.sync += outstanding.eq(outstanding + (admit & start) - frame_done)
 
