@@ -56,6 +56,8 @@ class Aggregation(wiring.Component):
     params : StereoParams
     every : int
         Register spacing of the adder trees (see :mod:`.trees`).
+    slot_base : int
+        Clocks from the core's slot clock to ``first`` (see :class:`~.common.SlotClock`).
 
     Attributes
     ----------
@@ -74,8 +76,8 @@ class Aggregation(wiring.Component):
         Clocks from input (``tag``, unit 0's costs) to output.
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY):
-        self.params, self.every = params, every
+    def __init__(self, params, every=DEFAULT_EVERY, slot_base=0):
+        self.params, self.every, self.slot_base = params, every, slot_base
         a = params.agg_radius
         self.from_costs = a > 0 and params.stored_rows == "costs"
         in_bits = params.cost_bits if a == 0 or self.from_costs else vertical_bits(params)
@@ -96,7 +98,7 @@ class Aggregation(wiring.Component):
     def elaborate(self, platform):
         p = self.params
         m = Module()
-        slots = SlotClock(m, self.first, self.round, p.rounds, "aggregation")
+        slots = SlotClock(m, self.first, self.round, p.rounds, "aggregation", self.slot_base)
         values = [self.costs[i] for i in range(p.per_round)]
         tag = self.tag
         if self.from_costs:

@@ -56,6 +56,8 @@ class CalculationStage(wiring.Component):
     params : StereoParams
     every : int
         Register spacing of the transform, cost and adder/minimum trees (see :mod:`.trees`).
+    slot_base : int
+        Clocks from the core's slot clock to ``first`` (see :class:`~.common.SlotClock`).
 
     Attributes
     ----------
@@ -77,8 +79,8 @@ class CalculationStage(wiring.Component):
         Clocks from the input to ``sums`` and to the partition winner.
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY):
-        self.params, self.every = params, every
+    def __init__(self, params, every=DEFAULT_EVERY, slot_base=0):
+        self.params, self.every, self.slot_base = params, every, slot_base
         copies = centre_copies(params)
         self.transform_left = Transform(params, every, copies)
         self.transform_right = Transform(params, every, copies)
@@ -87,7 +89,9 @@ class CalculationStage(wiring.Component):
         self.rows = cost_rows(params)
         self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
                            for _ in range(params.per_round)]
-        self.aggregation = (SemiGlobalAggregation if params.is_sgm else Aggregation)(params, every)
+        timing = calculation_timing(params, every)
+        self.aggregation = (SemiGlobalAggregation(params, every) if params.is_sgm else
+                            Aggregation(params, every, slot_base + timing.vertical))
         timing = calculation_timing(params, every)
         # Offsets (clocks after the input) of the datapath's steps; see elaborate().
         self.transformed, self.stored = timing.transformed, timing.stored
@@ -113,7 +117,7 @@ class CalculationStage(wiring.Component):
     def elaborate(self, platform):
         p = self.params
         m = Module()
-        slots = SlotClock(m, self.first, self.round, p.rounds, "calculation")
+        slots = SlotClock(m, self.first, self.round, p.rounds, "calculation", self.slot_base)
 
         m.submodules.transform_left = tl = self.transform_left
         m.submodules.transform_right = tr = self.transform_right

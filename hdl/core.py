@@ -79,12 +79,12 @@ class NpStereoCore(wiring.Component):
         self.params = params
         timing = core_timing(params, every)
         self.input_stage = InputStage(params)
-        self.calculation_stage = CalculationStage(params, every)
+        self.calculation_stage = CalculationStage(params, every, timing.calculation)
         self.evaluation_stage = EvaluationStage(params)
         # Offsets (clocks after admission) where each stage's input is slot-aligned.
         self.calculation_at, self.sums_at = timing.calculation, timing.sums
         self.evaluation_at = timing.evaluation
-        self.lr_check = LRCheck(params, timing.left - timing.sums)
+        self.lr_check = LRCheck(params, timing.left - timing.sums, timing.sums)
         self.clock_latency = timing.output
         #: Output queue depth: every position in flight must find room for its word.
         self.queue_depth = timing.queue_depth

@@ -53,6 +53,8 @@ class LRCheck(wiring.Component):
     left_offset : int
         Where ``disparity``/``left_tag`` are slot-aligned, in clocks after this stage's
         input (``sums``/``tag``).
+    slot_base : int
+        Clocks from the core's slot clock to ``first`` (see :class:`~.common.SlotClock`).
 
     Attributes
     ----------
@@ -76,8 +78,8 @@ class LRCheck(wiring.Component):
         Clocks from the input to ``retire``.
     """
 
-    def __init__(self, params, left_offset):
-        self.params, self.left_offset = params, left_offset
+    def __init__(self, params, left_offset, slot_base=0):
+        self.params, self.left_offset, self.slot_base = params, left_offset, slot_base
         depth, rounds, units = params.disparities, params.rounds, params.per_round
         timing = lr_timing(params, left_offset)
         #: Offset of the final dR leaving the last unit (see elaborate()).
@@ -104,7 +106,7 @@ class LRCheck(wiring.Component):
     def elaborate(self, platform):
         p = self.params
         m = Module()
-        slots = SlotClock(m, self.first, self.round, p.rounds, "lr")
+        slots = SlotClock(m, self.first, self.round, p.rounds, "lr", self.slot_base)
         if not p.lr_check:
             tag = self.left_tag
             with m.If(slots.first(self.left_offset)):
