@@ -27,7 +27,7 @@ from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, better, bits_for, pipe, round_base, \
     tag_layout
-from .plan import LR_STAGE_A, lr_timing
+from .plan import LR_STAGE_A, lr_stage_b, lr_timing
 
 __all__ = ["LRCheck"]
 
@@ -150,7 +150,12 @@ class LRCheck(wiring.Component):
         in_frame = Signal(name="lr_in_frame")
         m.d.sync += [x_minus_base.eq(tag.x - round_base(m, slots, 1, units)),
                      in_frame.eq(tag.valid & self._in_frame(tag))]
-        stage_a, stage_b = LR_STAGE_A, LR_STAGE_A + 1
+        stage_a, stage_b = LR_STAGE_A, lr_stage_b(p)
+        # With R >= 3 the word read in stage A is registered before it is compared (a LUT
+        # RAM read and a carry chain in one clock were 7.3 ns, census 7x7 on ECP5): the
+        # write then lands two clocks after the next unit's read of that word, which
+        # reads it again R clocks after the first.
+        split = stage_b - stage_a == 2
         first_disparity = pipe(m, round_base(m, slots, 1, units), stage_b - 1,
                                "lr_first_disparity")
         writing = slots.delay(tag.valid, 1, stage_b - 1, "lr_writing")
@@ -161,18 +166,20 @@ class LRCheck(wiring.Component):
             ok = Signal(name=f"candidate_ok{i}")
             m.d.sync += ok.eq(in_frame & (x_minus_base >= i))
             ok = pipe(m, ok, stage_b - 3, f"candidate_ok{i}", reset=True)
-            early_cost = pipe(m, self.sums[i], stage_a, f"candidate_cost{i}")
+            early_cost = pipe(m, self.sums[i], stage_b - 1, f"candidate_cost{i}")
             cost = pipe(m, early_cost, 1, f"candidate_cost{i}_b")
             if rounds > 1:
-                # The comparison is made in stage A, on the word as it is read, and
-                # registered with it: in stage B only the choice remains in front of the
-                # store's write (a comparison there was the critical path of rank 7x7).
-                # The word's last write landed R-1 >= 1 clocks before this read.
+                # The comparison is registered with the word it was made on: in stage B
+                # only the choice remains in front of the store's write (a comparison
+                # there was the critical path of rank 7x7). The word's last write landed
+                # at least a clock before this read.
                 held = Signal(entry, name=f"held{i}", reset_less=True)
                 lower = Signal(name=f"candidate_lower{i}")
                 read_address = slots.phased_round(stage_a, i, f"right_winners{i}_read")
-                m.d.sync += [held.eq(store.read(read_address)),
-                             lower.eq(better(early_cost, store.read(read_address).cost))]
+                word = store.read(read_address)
+                if split:
+                    word = pipe(m, word, 1, f"right_winner{i}_read")
+                m.d.sync += [held.eq(word), lower.eq(better(early_cost, word.cost))]
                 fresh = slots.first(stage_b)
             else:
                 # With R = 1 the word is written in every clock: it is compared in stage B.

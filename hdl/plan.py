@@ -25,7 +25,7 @@ __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "outp
            "vertical_bits", "VERTICAL_READ", "vertical_plan", "horizontal_plan",
            "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
-           "LR_STAGE_A", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
+           "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame", "Memory", "memories", "memory_bits", "SGM_LOOP_CLOCKS",
            "sgm_min_rounds", "SgmTiming", "sgm_timing", "sgm_memories"]
 
@@ -283,6 +283,13 @@ def calculation_timing(params, every=DEFAULT_EVERY):
 LR_STAGE_A = 2
 
 
+def lr_stage_b(params):
+    """Offset where the L/R check's units choose and write the running winner: a clock
+    after stage A, or two with R >= 3 (the word read is registered before it is
+    compared; the next unit reads that word again R clocks after it first did)."""
+    return LR_STAGE_A + (2 if params.rounds >= 3 else 1)
+
+
 @dataclass(frozen=True)
 class LRTiming:
     """Offsets inside the L/R check, in clocks after its input (the aggregated sums)."""
@@ -295,8 +302,8 @@ class LRTiming:
 def lr_timing(params, left):
     """The L/R check's offsets, for left winners arriving ``left`` clocks after the sums.
 
-    The last unit's stage B of round R-1 (LR_STAGE_A + 1 + R - 1), then a register: the
-    final dR. Its check then takes 7 clocks (left winners' RAM and its output register,
+    The last unit's stage B of round R-1 (:func:`lr_stage_b` + R - 1), then a register:
+    the final dR. Its check then takes 7 clocks (left winners' RAM and its output register,
     the partner's address, the history RAM and its output register, the two comparisons
     with the consistency bounds, the result). The
     stores are indexed by position: the left side writes ``left`` clocks after the input,
@@ -307,7 +314,7 @@ def lr_timing(params, left):
     if not params.lr_check:
         return LRTiming(left, 0, 0, left + 1)
     rounds = params.rounds
-    exit_ = LR_STAGE_A + 1 + rounds
+    exit_ = lr_stage_b(params) + rounds
     ahead = max(-(-(exit_ - left) // rounds) + 1, 0)
     history = 1 << (params.disparities + ahead + 6 - 1).bit_length()
     return LRTiming(left, exit_, history, exit_ + 7)
