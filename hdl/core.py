@@ -32,7 +32,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import ParameterError
 from .calculation_stage import CalculationStage
-from .common import SlotClock, bits_for
+from .common import SlotClock, bits_for, pipe
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
@@ -140,6 +140,12 @@ class NpStereoCore(wiring.Component):
                                         INPUT_QUEUE)
         m.d.comb += self.s_axis_tready.eq(level + captured_valid + staged_valid
                                           <= INPUT_QUEUE - 1)
+        # With R >= 2 the head's pixels are registered on their way to the position's
+        # register (the queue sits by the pins, the position's register by the line
+        # buffers: census 9x9, 9.6 ns through the queue's read multiplexer): the read
+        # pointer moves only when the decision pops, in round R-1, so in the next round
+        # R-1 the register holds the head the decision was made on.
+        head_pixels = head.data if rounds == 1 else pipe(m, head.data, 1, "in_queue_pixels")
 
         # Output: the queue of words, and the credits of positions it can still take.
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
@@ -334,7 +340,7 @@ class NpStereoCore(wiring.Component):
         admitted, started, overlapping = Signal(), Signal(), Signal()
         pixels = Signal(16, reset_less=True)
         m.d.sync += [admitted.eq(admit), started.eq(start), overlapping.eq(overlap),
-                     pixels.eq(Mux(take, head.data, 0))]
+                     pixels.eq(Mux(take, head_pixels, 0))]
 
         m.d.comb += [
             inp.admit.eq(admitted), inp.start.eq(started), inp.overlap.eq(overlapping),
