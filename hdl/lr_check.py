@@ -268,19 +268,22 @@ class LRCheck(wiring.Component):
         partner = pipe(m, history_read.data, 1, "partner")
         checked = pipe(m, entry, 4, "checked_left_late")
         stage = pipe(m, Cat(leaving, primed), 6, "check_pulse", reset=True)
-        # What does not depend on dR is decided while dR is read.
+        # What does not depend on dR is decided while dR is read, from the left winner
+        # registered once more: the comparisons' carry chains right behind the block RAM
+        # were 7.3 ns (census 7x7 on ECP5).
+        early = pipe(m, entry, 1, "checked_left_early")
         placed = Signal(name="checked_placed")
         in_frame = Signal(name="checked_in_frame")
-        m.d.sync += [placed.eq((entry.tag.x >= entry.d) &
-                               (entry.tag.x >= p.first_valid_column)),
-                     in_frame.eq(self._in_frame(entry.tag))]
-        kept = pipe(m, placed, 3, "checked_placed")
-        in_frame = pipe(m, in_frame, 3, "checked_in_frame")
+        m.d.sync += [placed.eq((early.tag.x >= early.d) &
+                               (early.tag.x >= p.first_valid_column)),
+                     in_frame.eq(self._in_frame(early.tag))]
+        kept = pipe(m, placed, 2, "checked_placed")
+        in_frame = pipe(m, in_frame, 2, "checked_in_frame")
         if p.lr_threshold is not None:
             low = Signal(range(-p.lr_threshold, depth), name="consistent_low")
             high = Signal(range(depth + p.lr_threshold), name="consistent_high")
-            m.d.sync += [low.eq(entry.d - p.lr_threshold), high.eq(entry.d + p.lr_threshold)]
-            low, high = pipe(m, low, 2, "consistent_low"), pipe(m, high, 2, "consistent_high")
+            m.d.sync += [low.eq(early.d - p.lr_threshold), high.eq(early.d + p.lr_threshold)]
+            low, high = pipe(m, low, 1, "consistent_low"), pipe(m, high, 1, "consistent_high")
             consistent = Signal(name="consistent")
             m.d.sync += consistent.eq(_consistent(partner, low, high))
             kept = kept & consistent
