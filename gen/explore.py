@@ -77,30 +77,37 @@ def configurations(grid):
     """The validated configurations of ``grid``, in grid order, and the combinations
     skipped (one line each).
 
-    A value that is wrong on its own (block 4, rounds that do not divide D, an
+    A value that no combination accepts (block 4, rounds that do not divide D, an
     aggregation window too wide for the frame) is a one-line :class:`ParameterError`; a
-    combination of valid values that is not valid together is skipped and named. An
+    combination of values that others accept, but not together (SGM's default penalties
+    with a transform whose costs are too narrow for them, too few rounds for SGM), is
+    skipped and named. An
     empty axis, or a grid whose every combination is skipped, is a one-line
     :class:`UserError`.
     """
     for axis, option in Grid._AXES:
         if not getattr(grid, axis):
             raise UserError(f"the grid is empty: {option} has no values")
-    first = {axis: getattr(grid, axis)[0] for axis, _ in Grid._AXES}
-    for axis, _ in Grid._AXES:
-        for value in getattr(grid, axis):
-            values = dict(first, **{axis: value})
-            _params(grid, *(values[name] for name, _ in Grid._AXES))
-    chosen, skipped = [], []
+    chosen, skipped, errors = [], [], {}
+    valid = set()
     for combination in itertools.product(*(getattr(grid, axis) for axis, _ in Grid._AXES)):
         try:
             params = _params(grid, *combination)
+            check_buildable(params)
         except ParameterError as error:
             skipped.append(f"{combination}: {error}")
+            for axis_index, value in enumerate(combination):
+                errors.setdefault((axis_index, value), error)
             continue
-        check_buildable(params)
+        valid.update(enumerate(combination))
         if params not in chosen:
             chosen.append(params)
+    # A value no combination accepts is wrong on its own (block 4, rounds that divide no
+    # D, SGM penalties too wide for every transform of the grid): its one-line error.
+    for axis_index, (axis, _) in enumerate(Grid._AXES):
+        for value in getattr(grid, axis):
+            if (axis_index, value) not in valid:
+                raise errors[axis_index, value]
     if not chosen:
         raise UserError(f"the grid is empty: no valid configuration ({skipped[0]})")
     return chosen, skipped

@@ -33,7 +33,7 @@ from npstereo.gen.explore import Grid, configurations, explore, pareto_front, pl
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
 from npstereo.hdl import plan
-from npstereo.params import StereoParams, UserError
+from npstereo.params import ParameterError, StereoParams, UserError
 
 WIDTH, HEIGHT, DISPARITIES = 32, 8, 8
 #: Worker processes of every cluster the tests start (marked ``dask``).
@@ -275,6 +275,15 @@ def test_grid_order_and_aggregation_values_pass_through():
     # "sgm" is handed to StereoParams as given: the SGM core with its default penalties.
     sgm, skipped = configurations(Grid(("census",), (7,), (8,), ("sgm",), ("auto",), 16, 32, 8))
     assert skipped == [] and [p.aggregation for p in sgm] == ["sgm"] and sgm[0].p2 == 79
+    # SGM's default P2 is too wide for census 3x3's costs, not for 7x7's: that one
+    # combination is skipped and named, the rest of the grid runs.
+    mixed, skipped = configurations(Grid(("census",), (3, 7), (8,), (3, "sgm"), ("auto",),
+                                         8, 32, 8))
+    assert [(p.block, p.aggregation) for p in mixed] == [(3, 3), (7, 3), (7, "sgm")]
+    assert len(skipped) == 1 and skipped[0].startswith("('census', 3, 8, 'sgm', 'auto'): P2")
+    # A value that no combination takes is an error of its own.
+    with pytest.raises(ParameterError, match="P2 must be <= 55"):
+        configurations(Grid(("census",), (3,), (8,), (3, "sgm"), ("auto",), 8, 32, 8))
 
 
 def _point(logic, correct, fits=True, fps=50.0, memory=100):
