@@ -27,7 +27,7 @@ from amaranth.lib.wiring import In, Out
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
 from .plan import (aggregation_latency, horizontal_plan, unit_skews, vertical_bits,
                    vertical_clocks, vertical_plan)
-from .trees import DEFAULT_EVERY, build_sum, register_plan
+from .trees import DEFAULT_EVERY, build_sum
 
 __all__ = ["Aggregation"]
 

@@ -33,11 +33,11 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import (calculation_timing, centre_copies, cost_rows, min_tree_plan, store_slices,
-                   unit_skews, vertical_bits)
+from .plan import (calculation_timing, centre_copies, cost_rows, min_tree_plan, row_sum_plan,
+                   store_slices, unit_skews, vertical_bits)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
-from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan, select_min
+from .trees import DEFAULT_EVERY, build_sum, build_tree, select_min
 
 __all__ = ["CalculationStage"]
 
@@ -84,7 +84,6 @@ class CalculationStage(wiring.Component):
         copies = centre_copies(params)
         self.transform_left = Transform(params, every, copies)
         self.transform_right = Transform(params, every, copies)
-        a = params.agg_radius
         #: Rows whose costs the cost units compute: A with stored transforms, else 1.
         self.rows = cost_rows(params)
         self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
@@ -351,7 +350,7 @@ class CalculationStage(wiring.Component):
             if self.rows > 1:
                 # The masks are a level of logic in front of the adders (rank 7x7 on ECP5:
                 # a mask and two carry chains were 7.9 ns).
-                total = build_sum(m, 1, row_costs, register_plan(self.rows, self.every, 1, True))
+                total = build_sum(m, 1, row_costs, row_sum_plan(p, self.every))
                 total = total[:vertical_bits(p)]
             else:
                 total = pipe(m, row_costs[0], 1, f"masked_cost{i}")

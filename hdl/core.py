@@ -32,7 +32,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import ParameterError
 from .calculation_stage import CalculationStage
-from .common import SlotClock, bits_for, pipe
+from .common import SlotClock, pipe
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck

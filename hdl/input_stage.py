@@ -97,7 +97,7 @@ class InputStage(wiring.Component):
 
     def elaborate(self, platform):
         p = self.params
-        width, height, block, r = p.width, p.height, p.block, p.radius
+        width, block, r = p.width, p.block, p.radius
         m = Module()
         slots = SlotClock(m, self.first, self.round, p.rounds, "input")
 
@@ -118,7 +118,8 @@ class InputStage(wiring.Component):
 
         # Two clocks later the line buffers' rows of that column have left the block RAM
         # and its output register; the pixel, the address and the flags wait for them.
-        admitted = pipe(m, self.admit, 2, "admitted", reset=True)
+        stepping = pipe(m, self.admit, 1, "admitted_early", reset=True)
+        admitted = pipe(m, stepping, 1, "admitted", reset=True)
         written_address = pipe(m, address, 2, "written_address")
 
         tag, keep = self._centre(m, slots)
@@ -145,9 +146,12 @@ class InputStage(wiring.Component):
             # Column c (0 = oldest, dx = -r) packs its B pixels top (dy = -r) to bottom.
             columns = [Signal(8 * block, name=f"{name}_column{c}", reset_less=True)
                        for c in range(block)]
-            with m.If(admitted):
-                m.d.sync += [columns[c].eq(columns[c + 1]) for c in range(block - 1)]
-                m.d.sync += columns[block - 1].eq(Cat(*reversed(older), newest_pixel))
+            # Each column shifts by an enable of its own (a copy of ``admitted``).
+            for c in range(block):
+                shift = slots.private_copy(stepping, 1, c, f"{name}_shift{c}")
+                with m.If(shift):
+                    m.d.sync += columns[c].eq(columns[c + 1] if c + 1 < block else
+                                              Cat(*reversed(older), newest_pixel))
             window = self.window_left if name == "left" else self.window_right
             # The masked window is a register of its own: a mask in front of the
             # transform's comparisons was the longest path (11 ns for census 9x9 on ECP5,

@@ -23,7 +23,7 @@ __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "outp
            "transform_plan", "cost_plan", "min_tree_plan", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
            "vertical_bits", "VERTICAL_READ", "vertical_plan", "horizontal_plan",
-           "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
+           "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame", "Memory", "memories", "memory_bits", "SGM_LOOP_CLOCKS",
@@ -179,13 +179,19 @@ VERTICAL_READ = 4
 def vertical_plan(params, every=DEFAULT_EVERY):
     """Register plan of the vertical sum of A stored costs; their masks are a level of
     logic in front of the adders."""
-    return register_plan(params.aggregation, every, 1, True)
+    return register_plan(params.aggregation, every, 1, True, params.cost_bits)
 
 
 def horizontal_plan(params, every=DEFAULT_EVERY):
     """Register plan of the horizontal sum of 2a + 1 vertical sums; their masks are a
     level of logic in front of the adders."""
-    return register_plan(2 * params.agg_radius + 1, every, 1, True)
+    return register_plan(2 * params.agg_radius + 1, every, 1, True, vertical_bits(params))
+
+
+def row_sum_plan(params, every=DEFAULT_EVERY):
+    """Register plan of a cost unit's sum of its A row costs (rows above kept as
+    transforms); the masks are a level of logic in front of the adders."""
+    return register_plan(cost_rows(params), every, 1, True, params.cost_bits)
 
 
 def vertical_clocks(params, every=DEFAULT_EVERY):
@@ -268,7 +274,7 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     skew = unit_skews(params)[-1]
     stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)
     costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
-    vertical = costed + (sum(register_plan(rows, every, 1, True)) if rows > 1 else 1)
+    vertical = costed + (sum(row_sum_plan(params, every)) if rows > 1 else 1)
     # SGM takes the units' results re-aligned; the box sum takes them skewed and
     # re-aligns its own.
     vertical += skew if params.is_sgm else 0

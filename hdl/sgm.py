@@ -400,7 +400,7 @@ class SemiGlobalAggregation(wiring.Component):
         the position's own column and goes into the minima.
         """
         p, t, slots = self.params, self.timing, self._slots
-        units, rounds, width, tree = p.per_round, p.rounds, p.width, t.tree
+        units, rounds, width = p.per_round, p.rounds, p.width
         bits, p1 = p.path_cost_bits, p.p1
         plus_bits = (p.max_cost + p.p2 + p1).bit_length()
         ones = (1 << plus_bits) - 1
