@@ -33,11 +33,11 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import (calculation_timing, centre_copies, cost_rows, min_tree_plan, row_sum_plan,
+from .plan import (calculation_timing, centre_copies, cost_rows, row_sum_plan,
                    store_slices, unit_skews, vertical_bits)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
-from .trees import DEFAULT_EVERY, build_sum, build_tree, select_min
+from .trees import DEFAULT_EVERY, build_min_tree, build_sum
 
 __all__ = ["CalculationStage"]
 
@@ -149,7 +149,7 @@ class CalculationStage(wiring.Component):
         # j*D/R is added at the root (ties keep the lowest unit, i.e. the lowest disparity).
         index_shape = unsigned(bits_for(p.per_round - 1))
         leaves = [(aggregation.sums[i], Const(i, index_shape)) for i in range(p.per_round)]
-        best_cost, best_unit = build_tree(m, 1, leaves, select_min, min_tree_plan(p, self.every))
+        best_cost, best_unit = build_min_tree(m, 1, leaves, name="partition")
         first_disparity = round_base(m, slots, self.sums_latency + self.min_latency,
                                      p.per_round)
         m.d.sync += [self.best_cost.eq(best_cost),

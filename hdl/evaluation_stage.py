@@ -1,21 +1,27 @@
 """Evaluation stage: WTA across the R partition results of a position.
 
 Hardware counterpart of :func:`npstereo.golden.wta.evaluate_partitions`: the partitions
-arrive in increasing order, one per round, and a running winner keeps the earlier one on a
-tie (strict ``<``), so the result is the global argmin with ties to the lowest disparity.
+arrive in increasing order, one per round. After round R-1 the R winners stand in a shift
+register, and a minimum tree over them (:func:`~.trees.build_min_tree`, ties to the lower
+leaf, i.e. to the earlier partition) gives the global argmin with ties to the lowest
+disparity. A running winner would be a loop of one clock (a comparison of wide costs and
+the multiplexers it drives: 7.8 ns for census 9x9 on ECP5); the tree has a register after
+every comparison and every choice.
 """
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Module, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, better, bits_for, tag_layout
+from .common import SlotClock, better, bits_for, pipe, tag_layout
+from .plan import evaluation_latency
+from .trees import build_min_tree
 
 __all__ = ["EvaluationStage"]
 
 
 class EvaluationStage(wiring.Component):
-    """Running WTA over the rounds of one position.
+    """WTA over the rounds of one position.
 
     Attributes
     ----------
@@ -30,12 +36,12 @@ class EvaluationStage(wiring.Component):
     tag_out : Out(tag_layout)
         ``tag`` at ``latency``.
     latency : int
-        R: the winner is latched in the last round's clock.
+        :func:`~.plan.evaluation_latency`: the last round, the tree, the winner's register.
     """
 
     def __init__(self, params):
         self.params = params
-        self.latency = params.rounds
+        self.latency = evaluation_latency(params)
         super().__init__({
             "cost": In(params.aggregated_cost_bits),
             "disparity": In(bits_for(params.disparities - 1)),
@@ -49,14 +55,18 @@ class EvaluationStage(wiring.Component):
         p = self.params
         m = Module()
         slots = SlotClock(m, self.first, self.round, p.rounds, "evaluation")
-        best_cost = Signal.like(self.cost, name="best_cost", reset_less=True)
-        best_disparity = Signal.like(self.disparity, name="best_disparity", reset_less=True)
-        take = slots.first(0) | better(self.cost, best_cost)
-        disparity = Mux(take, self.disparity, best_disparity)
-        m.d.sync += [best_cost.eq(Mux(take, self.cost, best_cost)), best_disparity.eq(disparity)]
+        rounds = p.rounds
+        # Round j's winner, R-1-j clocks old when round R-1's arrives.
+        leaves = [pipe(m, self.cost, rounds - 1 - j, f"partition_cost{j}")
+                  for j in range(rounds)]
+        disparities = [pipe(m, self.disparity, rounds - 1 - j, f"partition_disparity{j}")
+                       for j in range(rounds)]
+        _, best = build_min_tree(m, 1, list(zip(leaves, disparities)), name="rounds",
+                                 compare=better)
         final = Signal.like(self.disparity, name="final", reset_less=True)
-        with m.If(slots.first(p.rounds - 1) if p.rounds > 1 else 1):
-            m.d.sync += final.eq(disparity)
+        # The tree's result for this position, a clock after it leaves the tree.
+        with m.If(slots.first(self.latency - 1) if rounds > 1 else 1):
+            m.d.sync += final.eq(best)
         m.d.comb += [self.disparity_out.eq(final),
-                     self.tag_out.eq(slots.delay(self.tag, 0, p.rounds, "evaluated_tag"))]
+                     self.tag_out.eq(slots.delay(self.tag, 0, self.latency, "evaluated_tag"))]
         return m

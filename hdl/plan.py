@@ -17,10 +17,11 @@ from dataclasses import dataclass
 
 from ..params import ParameterError
 from .common import tag_layout
-from .trees import DEFAULT_EVERY, popcount_plan, register_plan, sad_plan, tree_levels
+from .trees import (DEFAULT_EVERY, min_tree_latency, popcount_plan, register_plan, sad_plan,
+                    tree_levels)
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
-           "transform_plan", "cost_plan", "min_tree_plan", "CENTRE_FANOUT",
+           "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
            "vertical_bits", "VERTICAL_READ", "vertical_plan", "horizontal_plan",
            "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
@@ -116,11 +117,19 @@ def cost_plan(params, every=DEFAULT_EVERY):
     return _unit_plan(tree, params, every, 1 if tree is None else 0)
 
 
-def min_tree_plan(params, every=DEFAULT_EVERY):
-    """Register plan of the partition's WTA over D/R aggregated costs: a register after
-    every level (a level is a comparison whose result selects the whole (cost, index)
-    pair; two of them do not fit a 150 MHz clock on ECP5)."""
-    return register_plan(params.per_round, 1 if every else 0)
+def min_tree_clocks(params):
+    """Clocks of the partition's WTA over D/R aggregated costs: two per level (the
+    comparison, registered with both candidates, then the choice of the whole (cost,
+    index) pair; see :func:`~.trees.build_min_tree`)."""
+    return min_tree_latency(params.per_round)
+
+
+def evaluation_latency(params):
+    """Clocks from the evaluation stage's input (round 0's partition winner) to the
+    position's winner, slot-aligned: the R winners of a slot are in a shift register
+    after round R-1, a minimum tree over them (:func:`~.trees.build_min_tree`), then the
+    winner's register."""
+    return params.rounds + min_tree_latency(params.rounds)
 
 
 #: Comparisons (or differences) with the window's centre that one copy of it feeds.
@@ -279,7 +288,7 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     # re-aligns its own.
     vertical += skew if params.is_sgm else 0
     sums = vertical + aggregation_latency(params, every) + (0 if params.is_sgm else skew)
-    min_tree = sum(min_tree_plan(params, every))
+    min_tree = min_tree_clocks(params)
     return CalculationTiming(transformed, stored, costed, skew, vertical, sums, min_tree,
                              sums + min_tree + 1)
 
@@ -345,7 +354,7 @@ def core_timing(params, every=DEFAULT_EVERY):
     timing = calculation_timing(params, every)
     sums = calculation + timing.sums
     evaluation = calculation + timing.latency
-    left = evaluation + params.rounds                 # the evaluation stage's latency
+    left = evaluation + evaluation_latency(params)
     output = sums + lr_timing(params, left - sums).latency
     depth = 1 << (-(-output // params.rounds) + 4).bit_length()
     return CoreTiming(calculation, sums, evaluation, left, output, depth)
@@ -457,7 +466,7 @@ SGM_ROW_CLOCKS = 10
 
 def _sgm_tree_clocks(units):
     """Registers of a minimum over ``units`` values: one per level (a comparison and the
-    multiplexer it drives fill a 150 MHz clock on ECP5, as in :func:`min_tree_plan`)."""
+    multiplexer it drives fill a 150 MHz clock on ECP5)."""
     return tree_levels(units)
 
 

@@ -260,7 +260,7 @@ def test_matching_cost_matches_golden(transform, block, every):
 
 # Trees -----------------------------------------------------------------------------------
 
-def check_min_tree(count, width, every, seed, samples=40):
+def check_min_tree(count, width, every, seed, samples=40, split=False):
     rng = np.random.default_rng(seed)
     top = 2 ** width - 1
     vectors = []
@@ -273,7 +273,7 @@ def check_min_tree(count, width, every, seed, samples=40):
             vector = rng.integers(0, top + 1, count)
         vectors.append([int(v) for v in vector])
     expected = [(min(v), int(np.argmin(v))) for v in vectors]  # argmin: first minimum
-    dut = MinTree(count, width, every)
+    dut = MinTree(count, width, every, split)
 
     def apply(ctx, vector):
         for i, v in enumerate(vector):
@@ -288,6 +288,12 @@ def check_min_tree(count, width, every, seed, samples=40):
                          [(1, 4, 2), (2, 3, 0), (3, 5, 1), (8, 6, 2), (13, 4, 3), (33, 12, 2)])
 def test_min_tree_matches_numpy_argmin(count, width, every):
     check_min_tree(count, width, every, seed=count)
+
+
+@pytest.mark.parametrize("count,width", [(1, 4), (2, 3), (5, 5), (10, 10), (13, 4)])
+def test_split_min_tree_matches_numpy_argmin(count, width):
+    """The core's minimum trees: comparison and choice in separate clocks."""
+    check_min_tree(count, width, 0, seed=count, split=True)
 
 
 def check_adder_tree(count, width, every, seed, samples=30):
