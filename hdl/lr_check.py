@@ -258,32 +258,33 @@ class LRCheck(wiring.Component):
         m.d.comb += [history_write.addr.eq(written),
                      history_write.en.eq(leaving), history_write.data.eq(final),
                      left_read.addr.eq(checked_address)]
-        # Clock 1: the RAM; 2: its output register; 3: the partner's address; 4: the RAM;
-        # 5: its output register; 6: the comparisons with the bounds; 7: the result.
+        # Clock 1: the RAM; 2: its output register; 3: a fabric register; 4: the partner's
+        # address; 5: the RAM; 6: its output register; 7: a fabric register; 8: the
+        # comparisons with the bounds; 9: the result. Nothing but a register follows a
+        # block RAM's output register: a subtraction or comparisons' carry chains right
+        # behind it were 6.8-7.3 ns (census and rank 7x7 on ECP5).
         entry = pipe(m, left_read.data, 1, "checked_left")
-        checked_index = pipe(m, checked_address, 2, "checked_index")
-        partner_address = Signal(index_shape, name="partner_address", reset_less=True)
-        m.d.sync += partner_address.eq(checked_index - entry.d)
-        m.d.comb += history_read.addr.eq(partner_address)
-        partner = pipe(m, history_read.data, 1, "partner")
-        checked = pipe(m, entry, 4, "checked_left_late")
-        stage = pipe(m, Cat(leaving, primed), 6, "check_pulse", reset=True)
-        # What does not depend on dR is decided while dR is read, from the left winner
-        # registered once more: the comparisons' carry chains right behind the block RAM
-        # were 7.3 ns (census 7x7 on ECP5).
         early = pipe(m, entry, 1, "checked_left_early")
+        checked_index = pipe(m, checked_address, 3, "checked_index")
+        partner_address = Signal(index_shape, name="partner_address", reset_less=True)
+        m.d.sync += partner_address.eq(checked_index - early.d)
+        m.d.comb += history_read.addr.eq(partner_address)
+        partner = pipe(m, history_read.data, 2, "partner")
+        checked = pipe(m, entry, 6, "checked_left_late")
+        stage = pipe(m, Cat(leaving, primed), 8, "check_pulse", reset=True)
+        # What does not depend on dR is decided while dR is read.
         placed = Signal(name="checked_placed")
         in_frame = Signal(name="checked_in_frame")
         m.d.sync += [placed.eq((early.tag.x >= early.d) &
                                (early.tag.x >= p.first_valid_column)),
                      in_frame.eq(self._in_frame(early.tag))]
-        kept = pipe(m, placed, 2, "checked_placed")
-        in_frame = pipe(m, in_frame, 2, "checked_in_frame")
+        kept = pipe(m, placed, 4, "checked_placed")
+        in_frame = pipe(m, in_frame, 4, "checked_in_frame")
         if p.lr_threshold is not None:
             low = Signal(range(-p.lr_threshold, depth), name="consistent_low")
             high = Signal(range(depth + p.lr_threshold), name="consistent_high")
             m.d.sync += [low.eq(early.d - p.lr_threshold), high.eq(early.d + p.lr_threshold)]
-            low, high = pipe(m, low, 1, "consistent_low"), pipe(m, high, 1, "consistent_high")
+            low, high = pipe(m, low, 3, "consistent_low"), pipe(m, high, 3, "consistent_high")
             consistent = Signal(name="consistent")
             m.d.sync += consistent.eq(_consistent(partner, low, high))
             kept = kept & consistent

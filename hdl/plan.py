@@ -318,21 +318,21 @@ def lr_timing(params, left):
     """The L/R check's offsets, for left winners arriving ``left`` clocks after the sums.
 
     The last unit's stage B of round R-1 (:func:`lr_stage_b` + R - 1), then a register:
-    the final dR. Its check then takes 7 clocks (left winners' RAM and its output register,
-    the partner's address, the history RAM and its output register, the two comparisons
-    with the consistency bounds, the result). The
+    the final dR. Its check then takes 9 clocks (left winners' RAM, its output register and
+    a fabric register, the partner's address, the history RAM, its output register and a
+    fabric register, the two comparisons with the consistency bounds, the result). The
     stores are indexed by position: the left side writes ``left`` clocks after the input,
     the check reads at ``exit``; in between the left side runs ahead by up to
-    ceil((exit - left) / R) + 1 positions, and the history is read 3 clocks after
-    ``exit`` while up to 3 more positions write it.
+    ceil((exit - left) / R) + 1 positions, and the history is read 4 clocks after
+    ``exit`` while up to 4 more positions write it.
     """
     if not params.lr_check:
         return LRTiming(left, 0, 0, left + 1)
     rounds = params.rounds
     exit_ = lr_stage_b(params) + rounds
     ahead = max(-(-(exit_ - left) // rounds) + 1, 0)
-    history = 1 << (params.disparities + ahead + 6 - 1).bit_length()
-    return LRTiming(left, exit_, history, exit_ + 7)
+    history = 1 << (params.disparities + ahead + 7 - 1).bit_length()
+    return LRTiming(left, exit_, history, exit_ + 9)
 
 
 @dataclass(frozen=True)
