@@ -23,7 +23,7 @@ from .atomic import write_text
 from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
 from .engine import Task, TaskFailure, add_engine_arguments, check_engine_arguments, \
     cluster, run_tasks, task_key
-from .paper_resources import paper_configurations
+from .paper_resources import is_default_line_buffer, paper_configurations
 from .plots import sweep_plots
 from .report_cache import cache_key, design, memoised_digest, read_result, seed_cache, \
     source_hash, store_result
@@ -148,22 +148,31 @@ def _status_line(report):
         for t, r in report["results"].items())
 
 
+def sweep_pnr(params, pnr):
+    """Whether the paper sweep places and routes ``params``: with ``--pnr``, the line
+    buffer ``auto`` chooses (the other variants are synthesised only: place and route is
+    the sweep's longest part, and the default is what a user gets)."""
+    return pnr and is_default_line_buffer(params)
+
+
 def synthesis_tasks(configurations, targets, pnr, freq, timeout, cache, engine,
                     device=_DEFAULT_DEVICE):
     """``(reports from the cache, tasks for the rest)`` of a sweep: one :class:`Task` per
     configuration not wholly in ``cache``, cheap cells first (ext. census takes many
     times longer than the other three, and a sweep stopped early should hold as many
-    cells as possible)."""
+    cells as possible). Only default line buffers are placed and routed (:func:`sweep_pnr`).
+    """
     cached, tasks = [], []
     for p in sorted(configurations, key=lambda p: (p.transform == "ext-census", p.block,
                                                    p.stored_rows)):
-        report = lookup(p, targets, pnr, freq, cache, device)
+        p_pnr = sweep_pnr(p, pnr)
+        report = lookup(p, targets, p_pnr, freq, cache, device)
         if report is not None:
             cached.append(report)
             continue
-        key = task_key("synthesis", repr(p), list(targets), pnr, freq, timeout, engine,
+        key = task_key("synthesis", repr(p), list(targets), p_pnr, freq, timeout, engine,
                        device, source_hash())
-        tasks.append(Task(key, synthesis_job, (p, tuple(targets), pnr, freq, timeout,
+        tasks.append(Task(key, synthesis_job, (p, tuple(targets), p_pnr, freq, timeout,
                                       None if cache is None else str(cache), engine, device),
                           p.describe()))
     return cached, tasks
@@ -187,7 +196,7 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progre
     def finished(task, report, write):
         if isinstance(report, TaskFailure):  # the task killed its workers
             report = failed_report(task.args[0], task.args[1], report.message)
-        store_report(report, cache, pnr, freq)
+        store_report(report, cache, sweep_pnr(StereoParams(**report["params"]), pnr), freq)
         write(f"{task.label}: {_status_line(report)}")
         reports.append(report)
         if progress is not None:

@@ -5,10 +5,13 @@ Stratix II EP2S180 logic elements and memory bits of the four transforms at bloc
 ``npstereo report --paper`` runs to put ours beside them.
 """
 
+import dataclasses
+
 from ..params import TRANSFORMS, StereoParams
 
 __all__ = ["PAPER_BLOCKS", "PAPER_LOGIC", "PAPER_DID_NOT_FIT", "PAPER_MEMORY", "PAPER_CLOCK",
-           "PAPER_SIZE", "PAPER_DISPARITIES", "PAPER_ROUNDS", "paper_configurations"]
+           "PAPER_SIZE", "PAPER_DISPARITIES", "PAPER_ROUNDS", "paper_configurations",
+           "is_default_line_buffer"]
 
 #: Block sizes of the paper's figures 13 and 14.
 PAPER_BLOCKS = (7, 9, 11, 13, 15, 17, 19)
@@ -32,10 +35,15 @@ PAPER_SIZE = (450, 375)
 PAPER_DISPARITIES, PAPER_ROUNDS = 100, 10
 
 
-def paper_configurations(line_buffers=("transforms", "costs")):
+def paper_configurations(line_buffers=("transforms", "costs", "pixels")):
     """The paper's sweep, one configuration per transform, block and line buffer (the
-    hardware's two ways to keep the rows above: a user trades block RAM for logic)."""
+    hardware's three ways to keep the rows above: a user trades block RAM for logic)."""
     width, height = PAPER_SIZE
     return [StereoParams(transform=t, block=b, disparities=PAPER_DISPARITIES,
                          rounds=PAPER_ROUNDS, width=width, height=height, line_buffer=lb)
             for b in PAPER_BLOCKS for t in TRANSFORMS for lb in line_buffers]
+
+
+def is_default_line_buffer(params):
+    """Whether ``params`` keeps the rows above as ``line_buffer="auto"`` would."""
+    return params.stored_rows == dataclasses.replace(params, line_buffer="auto").stored_rows

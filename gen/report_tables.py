@@ -1,7 +1,8 @@
 """Text of resource reports: one configuration's table, and the sweep beside the paper."""
 
+from ..params import StereoParams
 from .paper_resources import PAPER_BLOCKS, PAPER_CLOCK, PAPER_DID_NOT_FIT, PAPER_LOGIC, \
-    PAPER_MEMORY
+    PAPER_MEMORY, is_default_line_buffer
 
 __all__ = ["format_table", "sweep_markdown"]
 
@@ -106,6 +107,8 @@ def sweep_markdown(reports):
         paper_logic = "-" if logic is None else f"{logic:,}" + (
             " (did not fit)" if (p["transform"], p["block"]) in PAPER_DID_NOT_FIT else "")
         rows = p.get("line_buffer", "auto")
+        if rows != "auto" and is_default_line_buffer(StereoParams(**p)):
+            rows += " (default)"
         lines.append("| " + " | ".join([
             p["transform"], f"{p['block']}x{p['block']}", rows, _cell(cv, "logic"),
             _cell(cv, "lut_rams"), paper_logic,

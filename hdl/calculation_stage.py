@@ -34,7 +34,7 @@ from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .plan import (calculation_timing, centre_copies, cost_rows, row_sum_plan,
-                   store_slices, unit_skews, vertical_bits)
+                   store_slices, transformed_rows, unit_skews, vertical_bits, window_rows)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
@@ -84,6 +84,11 @@ class CalculationStage(wiring.Component):
         copies = centre_copies(params)
         self.transform_left = Transform(params, every, copies)
         self.transform_right = Transform(params, every, copies)
+        #: With ``stored_rows == "pixels"``: the transforms of the windows 1 .. A-1 rows
+        #: above, (left, right) per row.
+        self.transforms_above = [(Transform(params, every, copies),
+                                  Transform(params, every, copies))
+                                 for _ in range(transformed_rows(params) - 1)]
         #: Rows whose costs the cost units compute: A with stored transforms, else 1.
         self.rows = cost_rows(params)
         self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
@@ -100,8 +105,8 @@ class CalculationStage(wiring.Component):
         self.sums_latency, self.min_latency = timing.sums, timing.min_tree
         self.latency = timing.latency
         units = params.per_round
-        window = data.ArrayLayout(unsigned(8), params.block * params.block)
-        centres = data.ArrayLayout(unsigned(8), copies)
+        window = data.ArrayLayout(unsigned(8), window_rows(params) * params.block)
+        centres = data.ArrayLayout(unsigned(8), copies * transformed_rows(params))
         super().__init__({
             "window_left": In(window), "window_right": In(window),
             "centres_left": In(centres), "centres_right": In(centres),
@@ -120,10 +125,13 @@ class CalculationStage(wiring.Component):
 
         m.submodules.transform_left = tl = self.transform_left
         m.submodules.transform_right = tr = self.transform_right
-        m.d.comb += [tl.window.eq(self.window_left), tr.window.eq(self.window_right),
-                     tl.en.eq(1), tr.en.eq(1)]
-        if tl.impl.copies > 1:
+        if not self.transforms_above:
+            m.d.comb += [tl.window.eq(self.window_left), tr.window.eq(self.window_right)]
+        m.d.comb += [tl.en.eq(1), tr.en.eq(1)]
+        if tl.impl.copies > 1 and not self.transforms_above:
             m.d.comb += [tl.centres.eq(self.centres_left), tr.centres.eq(self.centres_right)]
+        if self.transforms_above:
+            self._windows_above(m, tl, tr)
         left, right = self._transformed_rows(m, slots, tl.value, tr.value)
         tag = slots.delay(self.tag, 0, self.transformed, "transformed_tag")
         before = slots.delay(self.tag, 0, self.transformed - 1, "transformed_tag_ahead")
@@ -156,14 +164,43 @@ class CalculationStage(wiring.Component):
                      self.best_disparity.eq(first_disparity + best_unit)]
         return m
 
+    def _windows_above(self, m, tl, tr):
+        """``stored_rows == "pixels"``: the window k rows above the newest is rows
+        top - k - r .. top - k + r of the input stage's window; each transform unit takes
+        its window and its window's centre copies."""
+        p = self.params
+        block, r, copies = p.block, p.radius, tl.impl.copies
+        top = window_rows(p) - 1 - p.radius
+        units = [(tl, tr), *self.transforms_above]
+        for k, (left, right) in enumerate(units):
+            if k:
+                m.submodules[f"transform_left_above{k}"] = left
+                m.submodules[f"transform_right_above{k}"] = right
+                m.d.comb += [left.en.eq(1), right.en.eq(1)]
+            first = (top - k - r) * block
+            for unit, window, centres in ((left, self.window_left, self.centres_left),
+                                          (right, self.window_right, self.centres_right)):
+                m.d.comb += [unit.window[i].eq(window[first + i])
+                             for i in range(block * block)]
+                if copies > 1:
+                    m.d.comb += [unit.centres[j].eq(centres[k * copies + j])
+                                 for j in range(copies)]
+
     def _transformed_rows(self, m, slots, left, right):
         """The transforms of the rows of the aggregation window, slot-aligned at
         ``self.transformed``: the current row (from the transform units), then the rows
-        above (from a block RAM of transformed pixels, when the rows are recomputed)."""
+        above (from a block RAM of transformed pixels, or from transform units of their
+        own when they are transformed again from pixels)."""
         p = self.params
         delay = self.transformed - self.transform_left.latency
         left, right = (pipe(m, left, delay, "left_current"),
                        pipe(m, right, delay, "right_current"))
+        if self.transforms_above:
+            lefts, rights = [left], [right]
+            for k, (above_left, above_right) in enumerate(self.transforms_above):
+                lefts.append(pipe(m, above_left.value, delay, f"left_above{k + 1}"))
+                rights.append(pipe(m, above_right.value, delay, f"right_above{k + 1}"))
+            return lefts, rights
         if self.rows == 1:
             return [left], [right]
         above, bits = self.rows - 1, p.transform_bits

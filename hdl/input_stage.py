@@ -22,7 +22,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, bits_for, column_inside, pipe, tag_layout, y_range
-from .plan import INPUT_LATENCY, centre_copies
+from .plan import INPUT_LATENCY, centre_copies, transformed_rows, window_rows
 
 __all__ = ["InputStage"]
 
@@ -88,8 +88,9 @@ class InputStage(wiring.Component):
 
     def __init__(self, params):
         self.params = params
-        window = data.ArrayLayout(unsigned(8), params.block * params.block)
-        centres = data.ArrayLayout(unsigned(8), centre_copies(params))
+        window = data.ArrayLayout(unsigned(8), window_rows(params) * params.block)
+        centres = data.ArrayLayout(unsigned(8),
+                                   centre_copies(params) * transformed_rows(params))
         super().__init__({
             "admit": In(1), "start": In(1), "overlap": In(1),
             "left": In(8), "right": In(8),
@@ -102,6 +103,11 @@ class InputStage(wiring.Component):
     def elaborate(self, platform):
         p = self.params
         width, block, r = p.width, p.block, p.radius
+        # The window's rows: B, or B + A - 1 when the A windows of a column are all
+        # transformed here (``stored_rows == "pixels"``); ``top`` rows above the newest
+        # window's centre.
+        rows, windows = window_rows(p), transformed_rows(p)
+        top = rows - 1 - r
         m = Module()
         slots = SlotClock(m, self.first, self.round, p.rounds, "input")
 
@@ -132,22 +138,22 @@ class InputStage(wiring.Component):
             # write trails the read of the same column by two clocks, the next read of it
             # comes a row later), so Yosys needs no collision logic (no_rw_check).
             m.submodules[f"lines_{name}"] = lines = Memory(
-                shape=unsigned(8 * (block - 1)), depth=width, init=[],
+                shape=unsigned(8 * (rows - 1)), depth=width, init=[],
                 attrs={"no_rw_check": 1})
             read = lines.read_port(domain="sync")
             write = lines.write_port()
             # A plain register right behind the read port: the block RAM's own output
             # register on ECP5 (the flow packs it), 5 ns shorter than its bare output.
             older_word = pipe(m, read.data, 1, f"{name}_read")
-            older = [older_word[8 * s:8 * s + 8] for s in range(block - 1)]
+            older = [older_word[8 * s:8 * s + 8] for s in range(rows - 1)]
             newest_pixel = pipe(m, pixel, 1, f"{name}_pixel")
             m.d.comb += [
                 read.addr.eq(address),
                 write.addr.eq(written_address), write.en.eq(admitted),
-                write.data.eq(Cat(newest_pixel, *older[:block - 2])),
+                write.data.eq(Cat(newest_pixel, *older[:rows - 2])),
             ]
-            # Column c (0 = oldest, dx = -r) packs its B pixels top (dy = -r) to bottom.
-            columns = [Signal(8 * block, name=f"{name}_column{c}", reset_less=True)
+            # Column c (0 = oldest, dx = -r) packs its pixels top (dy = -top) to bottom.
+            columns = [Signal(8 * rows, name=f"{name}_column{c}", reset_less=True)
                        for c in range(block)]
             # Each column shifts by an enable of its own, a copy of ``admitted`` from a
             # tree of copies (four columns to a copy a clock earlier): one register
@@ -167,13 +173,16 @@ class InputStage(wiring.Component):
             # per-element assignments would each cost a full-width assignment cell.
             masked = Signal.like(window, name=f"{name}_window", reset_less=True)
             m.d.sync += masked.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
-                                      for row in range(block) for c in range(block)))
+                                      for row in range(rows) for c in range(block)))
             m.d.comb += window.eq(masked)
-            # The centre's copies take what the window register takes, in the clock the
-            # window shifts (the value then holds for the slot), each by an enable of its own.
-            centre = Mux(keep[r][r], columns[r][8 * r:8 * r + 8], 0)
+            # The centres' copies take what the window register takes, in the clock the
+            # window shifts (the value then holds for the slot), each by an enable of its
+            # own; window k (k rows above the newest) has its centre at row top - k.
             copies = self.centres_left if name == "left" else self.centres_right
+            per_window = len(copies) // windows
             for k in range(len(copies)):
+                row = top - k // per_window
+                centre = Mux(keep[row][r], columns[r][8 * row:8 * row + 8], 0)
                 copy = Signal(8, name=f"{name}_centre{k}", reset_less=True)
                 with m.If(slots.private_first(LATENCY - 1, k, f"{name}_centre{k}_round")):
                     m.d.sync += copy.eq(centre)
@@ -243,15 +252,17 @@ class InputStage(wiring.Component):
         # columns one in the step (x changes every step), for the rows one registered every
         # clock from window_y (rows change only at line ends, W > 2 steps apart; a jump
         # sets it itself).
-        offsets = range(-r, r + 1)
-        row_ok = [Signal(name=f"row_ok{o + r}") for o in offsets]
+        top = window_rows(p) - 1 - r
+        row_offsets = range(-top, r + 1)
+        row_ok = [Signal(name=f"row_ok{o + top}") for o in row_offsets]
         row_next = Signal(name="row_ok_next")          # row window_y + r + 1
+        offsets = range(-r, r + 1)
         col_ok = [Signal(name=f"col_ok{o + r}") for o in offsets]
         col_next = Signal(name="col_ok_next")           # column x + r + 1
         m.d.sync += row_next.eq(_row_inside(window_y, r + 1, height))
 
         def rows_at(value):
-            return [row_ok[o + r].eq(_row_inside_at(value, o, height)) for o in offsets] + \
+            return [row_ok[o + top].eq(_row_inside_at(value, o, height)) for o in row_offsets] + \
                    [row_next.eq(_row_inside_at(value, r + 1, height))]
 
         def columns_at(value):
@@ -279,8 +290,8 @@ class InputStage(wiring.Component):
                     m.d.sync += y.eq(y + 1)
                 with m.If(line_end & window_room):
                     m.d.sync += window_y.eq(window_y + 1)
-                    m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(2 * r)]
-                    m.d.sync += row_ok[2 * r].eq(row_next)
+                    m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(top + r)]
+                    m.d.sync += row_ok[top + r].eq(row_next)
                 # The window centre reaches the new frame's pixel (0, 0), then the
                 # aggregation centre does (the window centre is at (a, a) then); x agrees
                 # in both frames.
@@ -312,8 +323,8 @@ class InputStage(wiring.Component):
         # stepped flags: one flag per window row would fan out to a whole row of both
         # windows (5.6 ns of routing on ECP5).
         keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
-                for row in range(block)]
+                for row in range(top + r + 1)]
         with m.If(admitted):
             m.d.sync += [keep[row][c].eq(row_ok[row] & col_ok[c])
-                         for row in range(block) for c in range(block)]
+                         for row in range(top + r + 1) for c in range(block)]
         return tag, keep

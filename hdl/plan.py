@@ -23,6 +23,7 @@ from .trees import (DEFAULT_EVERY, min_tree_latency, popcount_plan, register_pla
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
+           "transformed_rows", "window_rows",
            "vertical_bits", "VERTICAL_READ", "vertical_plan", "horizontal_plan",
            "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
@@ -171,8 +172,22 @@ INPUT_LATENCY = 4
 
 def cost_rows(params):
     """Rows whose costs each cost unit computes: A when the rows above are kept as
-    transformed pixels (``stored_rows == "transforms"``), else 1."""
-    return params.aggregation if params.agg_radius and params.stored_rows == "transforms" else 1
+    transformed pixels or as pixels (``stored_rows`` "transforms" or "pixels"), else 1."""
+    if params.agg_radius and params.stored_rows in ("transforms", "pixels"):
+        return params.aggregation
+    return 1
+
+
+def transformed_rows(params):
+    """Rows whose windows are transformed per position: A with ``stored_rows ==
+    "pixels"`` (the rows above are transformed again from pixels), else 1."""
+    return cost_rows(params) if params.stored_rows == "pixels" else 1
+
+
+def window_rows(params):
+    """Rows of the input stage's window: B, or B + A - 1 when the rows above are
+    transformed again from pixels (the A windows of a column, one below the other)."""
+    return params.block + transformed_rows(params) - 1
 
 
 def vertical_bits(params):
@@ -279,7 +294,8 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     transform_latency = sum(transform_plan(params, every))
     rows = cost_rows(params)
     # At least a clock, so that unit 0's store write can be prepared a clock ahead.
-    transformed = max(transform_latency, 2 if rows > 1 else 1)
+    transformed = max(transform_latency, 2 if rows > 1 and params.stored_rows == "transforms"
+                      else 1)
     skew = unit_skews(params)[-1]
     stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)
     costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
@@ -406,9 +422,9 @@ def memories(params, every=DEFAULT_EVERY):
     build them (docs/hardware.md, "Memories")."""
     p = params
     units, rounds, a = p.per_round, p.rounds, p.agg_radius
-    result = [Memory("input lines", 2, p.width, 8 * (p.block - 1))]
+    result = [Memory("input lines", 2, p.width, 8 * (window_rows(p) - 1))]
     rows = cost_rows(p)
-    if rows > 1:
+    if rows > 1 and p.stored_rows == "transforms":
         result.append(Memory("transform lines", 1, p.width, 2 * (rows - 1) * p.transform_bits))
     if a and p.stored_rows == "costs":
         result.append(Memory("cost lines", units, p.width * rounds,

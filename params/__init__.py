@@ -25,7 +25,7 @@ TRANSFORMS = ("rank", "census", "ext-rank", "ext-census")
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
 #: (the costs of those rows are computed again, A cost units per disparity); "auto" takes
 #: whichever is cheaper overall for the transform (docs/hardware.md).
-LINE_BUFFERS = ("auto", "costs", "transforms")
+LINE_BUFFERS = ("auto", "costs", "transforms", "pixels")
 
 #: The ``aggregation`` value that replaces the A x A box by semi-global aggregation along
 #: the four raster-order paths (docs/semantics.md, "Semi-global aggregation").
@@ -289,14 +289,19 @@ class StereoParams:
 
     @property
     def stored_rows(self):
-        """What the hardware stores of the rows above: "costs" or "transforms".
+        """What the hardware stores of the rows above: "costs", "transforms" or "pixels".
 
-        "auto" keeps transformed pixels, except for the extended census, whose cost (k
-        byte-wise absolute differences and their sum) is too large to compute A times.
+        "pixels" keeps only A - 1 more rows of pixels and transforms the rows above again;
+        "transforms" keeps their transformed pixels; "costs" their costs. "auto" stores
+        what is narrow and recomputes what is cheap: the census transform (a k-bit word,
+        one comparison per bit) is recomputed from pixels, the rank and extended rank
+        transforms (one number each, but a sum over the window to recompute) are stored,
+        and the extended census keeps costs: its transform is 8k bits wide and its cost (k
+        byte-wise absolute differences and their sum) too large to compute A times.
         """
         if self.line_buffer != "auto":
             return self.line_buffer
-        return "costs" if self.transform == "ext-census" else "transforms"
+        return {"ext-census": "costs", "census": "pixels"}.get(self.transform, "transforms")
 
     @property
     def lr_check(self):

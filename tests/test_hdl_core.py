@@ -41,6 +41,11 @@ MATRIX = [
     ("census", 5, 8, 2, 3, 1, "layers", "costs"),
     ("rank", 3, 16, 4, 5, None, "independent", "costs"),
     ("ext-census", 3, 8, 2, 3, 1, "layers", "transforms"),
+    # The rows above transformed again from pixels.
+    ("census", 5, 8, 2, 3, 1, "layers", "pixels"),
+    ("rank", 3, 16, 4, 5, None, "independent", "pixels"),
+    ("ext-census", 3, 8, 1, 3, 2, "layers", "pixels"),
+    ("ext-rank", 5, 12, 3, 3, 0, "independent", "pixels"),
 ]
 
 
@@ -57,7 +62,7 @@ def test_matches_golden(transform, block, disparities, rounds, aggregation, lr, 
                  seed=rounds)
 
 
-@pytest.mark.parametrize("line_buffer", ["transforms", "costs"])
+@pytest.mark.parametrize("line_buffer", ["transforms", "costs", "pixels"])
 def test_two_frames_back_to_back(line_buffer):
     """Frames overlap in the pipeline: the first one's last rows are computed while the
     second one's first rows come in."""
@@ -92,7 +97,7 @@ def test_stale_memory_contents_never_reach_a_result(monkeypatch):
 
     monkeypatch.setattr(memory.Memory, "__init__", recording)
     rng = np.random.default_rng(5)
-    for line_buffer, lr in (("transforms", 1), ("costs", 0)):
+    for line_buffer, lr in (("transforms", 1), ("costs", 0), ("pixels", 1)):
         made.clear()
         params = StereoParams(transform="census", block=3, disparities=8, rounds=2,
                               lr_threshold=lr, width=20, height=6, line_buffer=line_buffer)

@@ -497,7 +497,7 @@ def check_aggregation(params, seed, bubbles=0.3):
 
 @pytest.mark.parametrize("transform,aggregation,disparities,rounds", [
     ("census", 3, 6, 1), ("rank", 3, 6, 3), ("ext-census", 5, 6, 2), ("ext-rank", 5, 4, 4)])
-@pytest.mark.parametrize("line_buffer", ["costs", "transforms"])
+@pytest.mark.parametrize("line_buffer", ["costs", "transforms", "pixels"])
 def test_aggregation_matches_golden(transform, aggregation, disparities, rounds, line_buffer):
     params = StereoParams(transform=transform, block=3, disparities=disparities,
                           rounds=rounds, aggregation=aggregation, width=9, height=6,

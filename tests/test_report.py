@@ -115,7 +115,8 @@ def test_small_core_report_and_cache(tmp_path):
 #: Shapes of the memory formula beyond test_small_core_report_and_cache's census 3x3, A = 3
 #: (rows above as transforms): the rows above as costs (the cost lines, A - 1 = 4 rows at
 #: 11 bits), R = 1 (stores are registers, not memories), no aggregation and no L/R check,
-#: semi-global aggregation (its rows of path costs, minima and stores).
+#: semi-global aggregation (its rows of path costs, minima and stores), the rows above as
+#: pixels (taller input lines, no transform lines).
 MEMORY_SHAPES = [
     StereoParams(transform="ext-rank", block=3, disparities=4, rounds=2, aggregation=5,
                  width=16, height=4, line_buffer="costs"),
@@ -125,6 +126,8 @@ MEMORY_SHAPES = [
                  lr_threshold=None, width=16, height=4),
     StereoParams(transform="census", block=3, disparities=6, rounds=6, aggregation="sgm",
                  p1=3, p2=20, width=8, height=4),
+    StereoParams(transform="census", block=3, disparities=4, rounds=2, aggregation=3,
+                 width=16, height=4, line_buffer="pixels"),
 ]
 
 
@@ -173,16 +176,23 @@ def test_failed_cell_keeps_the_sweep_going(monkeypatch):
     assert report["results"]["cyclonev"]["status"] == "failed"
     assert "blew up" in report["results"]["cyclonev"]["message"]
     text = sweep_markdown([report])
-    assert "| rank | 7x7 | transforms | failed |" in text and "10,174" in text
+    assert "| rank | 7x7 | transforms (default) | failed |" in text and "10,174" in text
 
 
 def test_paper_sweep_configurations():
     configurations = paper_configurations()
-    # 4 transforms x 7 blocks, each with the rows above kept as transforms and as costs.
-    assert len(configurations) == 56
+    # 4 transforms x 7 blocks, each with the rows above kept as transforms, costs, pixels.
+    assert len(configurations) == 84
     assert {(p.width, p.height, p.disparities, p.rounds) for p in configurations} == {
         (450, 375, 100, 10)}
-    assert {p.stored_rows for p in configurations} == {"transforms", "costs"}
+    assert {p.stored_rows for p in configurations} == {"transforms", "costs", "pixels"}
+    # One of the three per transform and block is the default, and only it is placed and
+    # routed by the sweep.
+    defaults = [p for p in configurations if cmd_report.sweep_pnr(p, True)]
+    assert len(defaults) == 28 and not any(cmd_report.sweep_pnr(p, False) for p in defaults)
+    assert {(p.transform, p.stored_rows) for p in defaults} == {
+        ("rank", "transforms"), ("ext-rank", "transforms"), ("census", "pixels"),
+        ("ext-census", "costs")}
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -243,9 +253,9 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                 "results": {"cyclonev": ok, "ecp5": too_big}}]
     text = sweep_markdown(reports)
     # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
-    assert "| rank | 7x7 | transforms | 5,087 | 40 | 10,174 | 0.50 |" in text
+    assert "| rank | 7x7 | transforms (default) | 5,087 | 40 | 10,174 | 0.50 |" in text
     assert "| 2.00 | 6.2 |" in text
-    assert "| rank | 7x7 | transforms | 6,000 | 4,000 | 6 | 9 | 5.0 | 160.0 | 94.8 | 100 |" in text
+    assert "| rank | 7x7 | transforms (default) | 6,000 | 4,000 | 6 | 9 | 5.0 | 160.0 | 94.8 | 100 |" in text
     assert "| does not fit (112 % LUT) |" in text
     written = sweep_plots(reports, tmp_path)
     assert [p.name for p in written] == ["logic.png", "memory.png", "fmax.png"]
