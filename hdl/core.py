@@ -338,14 +338,15 @@ class NpStereoCore(wiring.Component):
 
         # The decision's registers: round 0 of the next slot.
         admitted, started, overlapping = Signal(), Signal(), Signal()
-        # The pixels leave the queue unchanged and are zeroed (dummy positions) a clock
-        # later, by a flag registered with them: the decision's register reached the
-        # pixels' multiplexers by the line buffers across the core (census 9x9 on ECP5:
-        # 7.9 ns, one LUT).
-        raw, taken = Signal(16, reset_less=True), Signal(name="taken")
+        # The pixels leave the queue unchanged and are zeroed (dummy positions) two clocks
+        # later, by a flag registered with them twice: the decision's register reached the
+        # pixels' multiplexers by the line buffers across the core (census 9x9 and ext.
+        # rank 7x7 on ECP5: 7.9 ns through one LUT, also with one register between).
+        raw = pipe(m, head_pixels, 2, "raw_pixels")
+        taken = pipe(m, take, 2, "taken")
         pixels = Signal(16, reset_less=True)
         m.d.sync += [admitted.eq(admit), started.eq(start), overlapping.eq(overlap),
-                     raw.eq(head_pixels), taken.eq(take), pixels.eq(Mux(taken, raw, 0))]
+                     pixels.eq(Mux(taken, raw, 0))]
 
         m.d.comb += [
             inp.admit.eq(admitted), inp.start.eq(started), inp.overlap.eq(overlapping),

@@ -65,7 +65,7 @@ class InputStage(wiring.Component):
         With ``start``: the previous frame still has centres to compute (it was not
         flushed): keep its coordinates until the new frame's first centre.
     left, right : In(8)
-        The pixels of the admitted position (0 for dummy positions), a clock after
+        The pixels of the admitted position (0 for dummy positions), two clocks after
         ``admit``.
     first, round : In
         Round 0 pulse and round of the slot timing at the admission offset.
@@ -146,7 +146,7 @@ class InputStage(wiring.Component):
             # register on ECP5 (the flow packs it), 5 ns shorter than its bare output.
             older_word = pipe(m, read.data, 1, f"{name}_read")
             older = [older_word[8 * s:8 * s + 8] for s in range(rows - 1)]
-            newest_pixel = pipe(m, pixel, 1, f"{name}_pixel")
+            newest_pixel = pixel
             m.d.comb += [
                 read.addr.eq(address),
                 write.addr.eq(written_address), write.en.eq(admitted),
@@ -259,7 +259,15 @@ class InputStage(wiring.Component):
         offsets = range(-r, r + 1)
         col_ok = [Signal(name=f"col_ok{o + r}") for o in offsets]
         col_next = Signal(name="col_ok_next")           # column x + r + 1
-        m.d.sync += row_next.eq(_row_inside(window_y, r + 1, height))
+        # The rows' flags follow the window centre's frame, except when the rows above
+        # are transformed here again (``stored_rows == "pixels"``): then every window of
+        # the column is masked in the frame of the tag (the aggregation centre's), whose
+        # rows the costs are summed over. While frames overlap, the windows above the
+        # newest may still belong to the finishing frame, whose last aggregation
+        # windows need them; the newest's own costs are then outside the tag's frame.
+        by_tag = p.stored_rows == "pixels"
+        flag_y = y if by_tag else window_y
+        m.d.sync += row_next.eq(_row_inside(flag_y, r + 1, height))
 
         def rows_at(value):
             return [row_ok[o + top].eq(_row_inside_at(value, o, height)) for o in row_offsets] + \
@@ -290,6 +298,7 @@ class InputStage(wiring.Component):
                     m.d.sync += y.eq(y + 1)
                 with m.If(line_end & window_room):
                     m.d.sync += window_y.eq(window_y + 1)
+                with m.If(line_end & (y_room if by_tag else window_room)):
                     m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(top + r)]
                     m.d.sync += row_ok[top + r].eq(row_next)
                 # The window centre reaches the new frame's pixel (0, 0), then the
@@ -297,9 +306,12 @@ class InputStage(wiring.Component):
                 # in both frames.
                 with m.If(switch_window):
                     m.d.sync += [window_y.eq(0), window_room.eq(0 < highest)]
-                    m.d.sync += rows_at(0)
+                    if not by_tag:
+                        m.d.sync += rows_at(0)
                 with m.If(switch_tag):
                     m.d.sync += [y.eq(a), live.eq(1), y_room.eq(a < highest)]
+                    if by_tag:
+                        m.d.sync += rows_at(a)
             with m.If(start & overlap):
                 m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
                              switch_window.eq(tag_lag == window_event),

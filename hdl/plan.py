@@ -279,9 +279,10 @@ class CalculationTiming:
 def calculation_timing(params, every=DEFAULT_EVERY):
     """The calculation stage's offsets (see :mod:`.calculation_stage`).
 
-    The transform units' results; with the rows above recomputed, the block RAM of
-    transformed rows is read in round 0 and its word passes the RAM's output register, so
-    the current row waits for it (at least 2 clocks). The newest right word is written into
+    The transform units' results; with the rows above kept as transforms, the block RAM
+    of transformed rows is read in round 0 and its word passes the RAM's output register
+    and a fabric register, so the current row waits for it (at least 3 clocks). The
+    newest right word is written into
     unit 0's store in the one clock of a slot that the words coming round from the last
     unit leave free, and unit 0 reads it R - S clocks later (S: the last unit's skew), so
     with R >= 2 the stores are read R - S clocks after the transforms. Unit 0's read
@@ -294,7 +295,7 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     transform_latency = sum(transform_plan(params, every))
     rows = cost_rows(params)
     # At least a clock, so that unit 0's store write can be prepared a clock ahead.
-    transformed = max(transform_latency, 2 if rows > 1 and params.stored_rows == "transforms"
+    transformed = max(transform_latency, 3 if rows > 1 and params.stored_rows == "transforms"
                       else 1)
     skew = unit_skews(params)[-1]
     stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)

@@ -160,9 +160,14 @@ def test_misframed_input_then_clean_frame(fault):
     assert result["errors"] >= 1
 
 
-def test_no_error_on_clean_input():
-    params = StereoParams(transform="census", block=3, disparities=8, rounds=1,
-                          width=12, height=4)
+@pytest.mark.parametrize("line_buffer", ["transforms", "costs", "pixels"])
+@pytest.mark.parametrize("rounds", [1, 2])
+def test_no_error_on_clean_input(line_buffer, rounds):
+    """Two frames at full rate: the second one overlaps the first one's last rows (with
+    the rows above transformed again from pixels, the windows above the newest must be
+    masked in the finishing frame)."""
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=rounds,
+                          width=12, height=4, line_buffer=line_buffer)
     pair = stereo_pair("independent", 4, 12, 1)
     result = check_frames(params, [pair, pair], frame_beats(*pair) * 2)
     assert result["errors"] == 0
