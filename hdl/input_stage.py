@@ -28,8 +28,9 @@ __all__ = ["InputStage"]
 
 LATENCY = INPUT_LATENCY
 
-#: Window columns whose shift enables one early copy of the admission pulse feeds.
-SHIFT_FANOUT = 4
+#: Rows of a window column shifted by one copy of the admission pulse, and copies that
+#: one early copy (a clock before) feeds.
+SHIFT_ROWS, SHIFT_FANOUT = 3, 4
 
 
 def _row_inside(y, offset, height):
@@ -155,17 +156,21 @@ class InputStage(wiring.Component):
             # Column c (0 = oldest, dx = -r) packs its pixels top (dy = -top) to bottom.
             columns = [Signal(8 * rows, name=f"{name}_column{c}", reset_less=True)
                        for c in range(block)]
-            # Each column shifts by an enable of its own, a copy of ``admitted`` from a
-            # tree of copies (four columns to a copy a clock earlier): one register
-            # reaching them all was 10 ns of routing, census 9x9 on ECP5.
+            # Each group of SHIFT_ROWS rows of a column shifts by an enable of its own, a
+            # copy of ``admitted`` from a tree of copies (SHIFT_FANOUT groups to a copy a
+            # clock earlier): one register reaching them all was 10 ns of routing (census
+            # 9x9 on ECP5), one per column still 7 ns (rank 9x9).
+            groups = [(c, low, min(rows, low + SHIFT_ROWS)) for c in range(block)
+                      for low in range(0, rows, SHIFT_ROWS)]
             early = [slots.private_copy(self.admit, 0, g, f"{name}_shift_early{g}")
-                     for g in range(-(-block // SHIFT_FANOUT))]
-            for c in range(block):
-                shift = slots.private_copy(early[c // SHIFT_FANOUT], 1, c,
-                                           f"{name}_shift{c}")
+                     for g in range(-(-len(groups) // SHIFT_FANOUT))]
+            arriving = Cat(*reversed(older), newest_pixel)
+            for g, (c, low, high) in enumerate(groups):
+                shift = slots.private_copy(early[g // SHIFT_FANOUT], 1, g,
+                                           f"{name}_shift{g}")
+                source = columns[c + 1] if c + 1 < block else arriving
                 with m.If(shift):
-                    m.d.sync += columns[c].eq(columns[c + 1] if c + 1 < block else
-                                              Cat(*reversed(older), newest_pixel))
+                    m.d.sync += columns[c][8 * low:8 * high].eq(source[8 * low:8 * high])
             window = self.window_left if name == "left" else self.window_right
             # The masked window is a register of its own: a mask in front of the
             # transform's comparisons was the longest path (11 ns for census 9x9 on ECP5,
