@@ -27,6 +27,8 @@ from .plan import INPUT_LATENCY, centre_copies, transformed_rows, window_rows
 __all__ = ["InputStage"]
 
 LATENCY = INPUT_LATENCY
+#: Clocks from the admission to the window's shift (the masked window follows a clock later).
+SHIFTED = 3
 
 #: Rows of a window column shifted by one copy of the admission pulse, and copies that
 #: one early copy (a clock before) feeds.
@@ -179,7 +181,11 @@ class InputStage(wiring.Component):
             masked = Signal.like(window, name=f"{name}_window", reset_less=True)
             m.d.sync += masked.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
                                       for row in range(rows) for c in range(block)))
-            m.d.comb += window.eq(masked)
+            # And once more, with the centres' copies: each copy is then a register next to
+            # the comparisons it feeds, a clock away from the columns it is taken from (a
+            # copy feeding the comparisons straight from the columns was 5 ns of routing,
+            # census 9x9 on ECP5).
+            m.d.comb += window.eq(pipe(m, masked, 1, f"{name}_window_late"))
             # The centres' copies take what the window register takes, in the clock the
             # window shifts (the value then holds for the slot), each by an enable of its
             # own; window k (k rows above the newest) has its centre at row top - k.
@@ -189,18 +195,18 @@ class InputStage(wiring.Component):
                 row = top - k // per_window
                 centre = Mux(keep[row][r], columns[r][8 * row:8 * row + 8], 0)
                 copy = Signal(8, name=f"{name}_centre{k}", reset_less=True)
-                with m.If(slots.private_first(LATENCY - 1, k, f"{name}_centre{k}_round")):
+                with m.If(slots.private_first(SHIFTED, k, f"{name}_centre{k}_round")):
                     m.d.sync += copy.eq(centre)
-                m.d.comb += copies[k].eq(copy)
+                m.d.comb += copies[k].eq(pipe(m, copy, 1, f"{name}_centre{k}_late"))
 
         # The tag leaves with the masked window, a clock after the shift.
-        m.d.comb += self.tag.eq(slots.delay(tag, LATENCY - 1, 1, "window_tag"))
+        m.d.comb += self.tag.eq(slots.delay(tag, SHIFTED, LATENCY - SHIFTED, "window_tag"))
         return m
 
     def _centre(self, m, slots):
         """The centre's tag and the window masks, updated with the window.
 
-        The tag is slot-aligned at offset LATENCY - 1 (the stage delays it once more with
+        The tag is slot-aligned at offset SHIFTED (the stage delays it further with
         the masked window): x, y and live change with each
         admitted position, ``valid`` says in every slot whether it carries one.
 
@@ -328,10 +334,10 @@ class InputStage(wiring.Component):
                              switch_window.eq(countdown == window_event + 1),
                              switch_tag.eq(countdown == 2)]
 
-        # The tag changes with the window's shift (slot-aligned at LATENCY - 1).
+        # The tag changes with the window's shift (slot-aligned at SHIFTED).
         tag = Signal(layout)
         admitted = pipe(m, stepping, 1, "admitted_tag", reset=True)
-        with m.If(slots.first(LATENCY - 2)):
+        with m.If(slots.first(SHIFTED - 1)):
             m.d.sync += tag.valid.eq(admitted)
         with m.If(admitted):
             m.d.sync += [tag.x.eq(x), tag.y.eq(y), tag.live.eq(live)]

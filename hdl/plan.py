@@ -166,8 +166,9 @@ def store_slices(width):
 # Offsets of the stages ---------------------------------------------------------------------
 
 #: Clocks from the admission of a pixel to the window: the line buffers' block RAM read,
-#: its output register, the window's shift, the masked window's register.
-INPUT_LATENCY = 4
+#: its output register, the window's shift, the masked window's register, a second
+#: register of the window and the centres' copies.
+INPUT_LATENCY = 5
 
 
 def cost_rows(params):
