@@ -6,7 +6,7 @@ extended rank: |TL - TR|), ``_census_cost`` (popcount of TL xor TR) and ``_ext_c
 caller's business, as in the golden model where it happens outside these functions.
 """
 
-from amaranth.hdl import Module, Signal, unsigned
+from amaranth.hdl import Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -54,6 +54,15 @@ class MatchingCost(wiring.Component):
         })
 
     def _rank_cost(self, m):
+        if self.latency == 2:
+            # Wide transforms: a - b and b - a registered (the borrow of the first says
+            # which one is |a - b|), the choice a clock later.
+            width = len(self.left)
+            forward, backward = self.left - self.right, self.right - self.left
+            forward, backward = (delay(m, self.en, forward, 1, "rank_forward"),
+                                 delay(m, self.en, backward, 1, "rank_backward"))
+            return delay(m, self.en, Mux(forward[width], backward[:width], forward[:width]),
+                         1, "rank_cost")
         return delay(m, self.en, absolute_difference(self.left, self.right), self.latency,
                      "rank_cost")
 

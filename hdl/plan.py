@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 from ..params import ParameterError
 from .common import tag_layout
-from .trees import (DEFAULT_EVERY, min_tree_latency, popcount_plan, register_plan, sad_plan,
-                    tree_levels)
+from .trees import (DEFAULT_EVERY, PAIRED_ADDER_BITS, min_tree_latency, popcount_plan,
+                    register_plan, sad_plan, tree_levels)
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
@@ -115,6 +115,10 @@ def cost_plan(params, every=DEFAULT_EVERY):
     difference.
     """
     tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
+    if tree is None and every and params.transform_bits > PAIRED_ADDER_BITS:
+        # Both differences registered, then the choice: a wide comparison, two
+        # subtractions and the multiplexer in one clock were 7.7 ns (ext. rank 9x9, ECP5).
+        return [True, True]
     return _unit_plan(tree, params, every, 1 if tree is None else 0)
 
 
