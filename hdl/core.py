@@ -141,12 +141,18 @@ class NpStereoCore(wiring.Component):
                                         lanes=[(0, 8), (8, 16), (16, 18)])
         m.d.comb += self.s_axis_tready.eq(level + captured_valid + staged_valid
                                           <= INPUT_QUEUE - 1)
-        # With R >= 2 the head's pixels are registered on their way to the position's
-        # register (the queue sits by the pins, the position's register by the line
-        # buffers: census 9x9, 9.6 ns through the queue's read multiplexer): the read
-        # pointer moves only when the decision pops, in round R-1, so in the next round
-        # R-1 the register holds the head the decision was made on.
-        head_pixels = head.data if rounds == 1 else pipe(m, head.data, 1, "in_queue_pixels")
+        # The head is registered on its way to the admission and the position's register
+        # (the queue sits by the pins: census 9x9, 9.6 ns through the queue's read
+        # multiplexer to the position's register, census 7x7 8.9 ns to the admission's
+        # conditions). The read pointer moves only when the decision pops, in round R-1:
+        # with R >= 4 the conditions, registered in round R-3, see the registered head of
+        # the new read pointer; with R = 2 or 3 only the pixels (taken in round R-1) are
+        # registered.
+        if rounds >= 4:
+            head = pipe(m, head, 1, "in_queue_head")
+            head_pixels = head.data
+        else:
+            head_pixels = head.data if rounds == 1 else pipe(m, head.data, 1, "in_queue_pixels")
 
         # Output: the queue of words, and the credits of positions it can still take.
         word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
