@@ -34,7 +34,7 @@ from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .plan import (calculation_timing, centre_copies, cost_rows, row_sum_plan,
-                   store_slices, transformed_rows, unit_skews, vertical_bits, window_rows)
+                   store_slices, transformed_rows, unit_skews, vertical_bits)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
@@ -105,7 +105,8 @@ class CalculationStage(wiring.Component):
         self.sums_latency, self.min_latency = timing.sums, timing.min_tree
         self.latency = timing.latency
         units = params.per_round
-        window = data.ArrayLayout(unsigned(8), window_rows(params) * params.block)
+        window = data.ArrayLayout(unsigned(8),
+                                  transformed_rows(params) * params.block * params.block)
         centres = data.ArrayLayout(unsigned(8), copies * transformed_rows(params))
         super().__init__({
             "window_left": In(window), "window_right": In(window),
@@ -165,19 +166,18 @@ class CalculationStage(wiring.Component):
         return m
 
     def _windows_above(self, m, tl, tr):
-        """``stored_rows == "pixels"``: the window k rows above the newest is rows
-        top - k - r .. top - k + r of the input stage's window; each transform unit takes
-        its window and its window's centre copies."""
+        """``stored_rows == "pixels"``: the input stage gives the A windows of the column
+        (each masked in its own centre's frame), the newest first; each transform unit
+        takes its window and its window's centre copies."""
         p = self.params
-        block, r, copies = p.block, p.radius, tl.impl.copies
-        top = window_rows(p) - 1 - p.radius
+        block, copies = p.block, tl.impl.copies
         units = [(tl, tr), *self.transforms_above]
         for k, (left, right) in enumerate(units):
             if k:
                 m.submodules[f"transform_left_above{k}"] = left
                 m.submodules[f"transform_right_above{k}"] = right
                 m.d.comb += [left.en.eq(1), right.en.eq(1)]
-            first = (top - k - r) * block
+            first = k * block * block
             for unit, window, centres in ((left, self.window_left, self.centres_left),
                                           (right, self.window_right, self.centres_right)):
                 m.d.comb += [unit.window[i].eq(window[first + i])

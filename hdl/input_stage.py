@@ -45,6 +45,16 @@ def _row_inside_at(y, offset, height):
     return int(0 <= y + offset < height)
 
 
+def _row_before(y, offset, height):
+    """Row ``y + offset`` lies in the frame before this one (rows -H .. -1)."""
+    return (y < -offset) & (y >= -height - offset)
+
+
+def _row_before_at(y, offset, height):
+    """:func:`_row_before` of a constant row."""
+    return int(-height <= y + offset < 0)
+
+
 def _column_inside_at(x, offset, width):
     """:func:`~.common.column_inside` of a constant column."""
     return int(0 <= x + offset < width)
@@ -91,7 +101,8 @@ class InputStage(wiring.Component):
 
     def __init__(self, params):
         self.params = params
-        window = data.ArrayLayout(unsigned(8), window_rows(params) * params.block)
+        window = data.ArrayLayout(unsigned(8),
+                                  transformed_rows(params) * params.block * params.block)
         centres = data.ArrayLayout(unsigned(8),
                                    centre_copies(params) * transformed_rows(params))
         super().__init__({
@@ -134,7 +145,9 @@ class InputStage(wiring.Component):
         admitted = pipe(m, self.admit, 2, "admitted", reset=True)
         written_address = pipe(m, address, 2, "written_address")
 
-        tag, keep = self._centre(m, slots)
+        tag, keeps = self._centre(m, slots)
+        # First row (in the column) of window k, k rows above the newest.
+        firsts = [top - k - r for k in range(windows)]
         for name, pixel in (("left", self.left), ("right", self.right)):
             # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
             # Every read address differs from the address written in the same clock (the
@@ -178,9 +191,13 @@ class InputStage(wiring.Component):
             # transform's comparisons was the longest path (11 ns for census 9x9 on ECP5,
             # the masks reaching 16 pixels each). One assignment of the whole window:
             # per-element assignments would each cost a full-width assignment cell.
+            # With the rows above transformed here, each of the A windows of the column is
+            # masked by flags of its own (``keeps[k]``, see _centre).
             masked = Signal.like(window, name=f"{name}_window", reset_less=True)
-            m.d.sync += masked.eq(Cat(Mux(keep[row][c], columns[c][8 * row:8 * row + 8], 0)
-                                      for row in range(rows) for c in range(block)))
+            m.d.sync += masked.eq(Cat(
+                Mux(keeps[k][row][c], columns[c][8 * (first + row):8 * (first + row + 1)], 0)
+                for k, first in enumerate(firsts)
+                for row in range(block) for c in range(block)))
             # And once more, with the centres' copies: each copy is then a register next to
             # the comparisons it feeds, a clock away from the columns it is taken from (a
             # copy feeding the comparisons straight from the columns was 5 ns of routing,
@@ -192,8 +209,9 @@ class InputStage(wiring.Component):
             copies = self.centres_left if name == "left" else self.centres_right
             per_window = len(copies) // windows
             for k in range(len(copies)):
-                row = top - k // per_window
-                centre = Mux(keep[row][r], columns[r][8 * row:8 * row + 8], 0)
+                window_index = k // per_window
+                row = firsts[window_index] + r
+                centre = Mux(keeps[window_index][r][r], columns[r][8 * row:8 * row + 8], 0)
                 copy = Signal(8, name=f"{name}_centre{k}", reset_less=True)
                 with m.If(slots.private_first(SHIFTED, k, f"{name}_centre{k}_round")):
                     m.d.sync += copy.eq(centre)
@@ -218,8 +236,9 @@ class InputStage(wiring.Component):
         last aggregation window must see the new frame's first row as outside. So the tag
         switches to the new frame a*W + a positions after the window masks do.
 
-        Returns the tag register and ``keep[row][column]``, 1 where the window pixel lies
-        inside the window centre's frame.
+        Returns the tag register and, per window of the column (the newest first),
+        ``keep[row][column]``, 1 where the window pixel lies inside the window centre's
+        frame.
         """
         p = self.params
         width, height, block, r, a = p.width, p.height, p.block, p.radius, p.agg_radius
@@ -270,19 +289,29 @@ class InputStage(wiring.Component):
         offsets = range(-r, r + 1)
         col_ok = [Signal(name=f"col_ok{o + r}") for o in offsets]
         col_next = Signal(name="col_ok_next")           # column x + r + 1
-        # The rows' flags follow the window centre's frame, except when the rows above
-        # are transformed here again (``stored_rows == "pixels"``): then every window of
-        # the column is masked in the frame of the tag (the aggregation centre's), whose
-        # rows the costs are summed over. While frames overlap, the windows above the
-        # newest may still belong to the finishing frame, whose last aggregation
-        # windows need them; the newest's own costs are then outside the tag's frame.
-        by_tag = p.stored_rows == "pixels"
-        flag_y = y if by_tag else window_y
-        m.d.sync += row_next.eq(_row_inside(flag_y, r + 1, height))
+        m.d.sync += row_next.eq(_row_inside(window_y, r + 1, height))
+        # With the rows above transformed here again (``stored_rows == "pixels"``) window
+        # k is masked in the frame of its own centre, window_y - k, as the transforms
+        # variant masked it when that row was the newest: while frames overlap, the
+        # windows above the newest may still belong to the finishing frame (centre above
+        # the new frame's row 0), whose rows are then the ones above row 0 (``prev_ok``),
+        # not those of the new frame.
+        windows = transformed_rows(p)
+        prev_ok = [Signal(name=f"prev_ok{o + top}") for o in row_offsets]
+        prev_next = Signal(name="prev_ok_next")
+        old = [Signal(name=f"window_old{k}") for k in range(windows)]   # window_y < k
+        if windows > 1:
+            m.d.sync += prev_next.eq(_row_before(window_y, r + 1, height))
+
+        def rows_before_at(value):
+            return [prev_ok[o + top].eq(_row_before_at(value, o, height))
+                    for o in row_offsets] + [prev_next.eq(_row_before_at(value, r + 1, height))] + \
+                   [old[k].eq(int(value < k)) for k in range(1, windows)]
 
         def rows_at(value):
             return [row_ok[o + top].eq(_row_inside_at(value, o, height)) for o in row_offsets] + \
-                   [row_next.eq(_row_inside_at(value, r + 1, height))]
+                   [row_next.eq(_row_inside_at(value, r + 1, height))] + \
+                   (rows_before_at(value) if windows > 1 else [])
 
         def columns_at(value):
             return [col_ok[o + r].eq(_column_inside_at(value, o, width)) for o in offsets] + \
@@ -309,20 +338,21 @@ class InputStage(wiring.Component):
                     m.d.sync += y.eq(y + 1)
                 with m.If(line_end & window_room):
                     m.d.sync += window_y.eq(window_y + 1)
-                with m.If(line_end & (y_room if by_tag else window_room)):
+                with m.If(line_end & window_room):
                     m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(top + r)]
                     m.d.sync += row_ok[top + r].eq(row_next)
+                    if windows > 1:
+                        m.d.sync += [prev_ok[i].eq(prev_ok[i + 1]) for i in range(top + r)]
+                        m.d.sync += prev_ok[top + r].eq(prev_next)
+                        m.d.sync += [old[k].eq(window_y + 1 < k) for k in range(1, windows)]
                 # The window centre reaches the new frame's pixel (0, 0), then the
                 # aggregation centre does (the window centre is at (a, a) then); x agrees
                 # in both frames.
                 with m.If(switch_window):
                     m.d.sync += [window_y.eq(0), window_room.eq(0 < highest)]
-                    if not by_tag:
-                        m.d.sync += rows_at(0)
+                    m.d.sync += rows_at(0)
                 with m.If(switch_tag):
                     m.d.sync += [y.eq(a), live.eq(1), y_room.eq(a < highest)]
-                    if by_tag:
-                        m.d.sync += rows_at(a)
             with m.If(start & overlap):
                 m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
                              switch_window.eq(tag_lag == window_event),
@@ -345,9 +375,16 @@ class InputStage(wiring.Component):
         # Which window pixels lie inside the frame, one register per pixel, from the
         # stepped flags: one flag per window row would fan out to a whole row of both
         # windows (5.6 ns of routing on ECP5).
-        keep = [[Signal(name=f"keep_r{row}_c{c}") for c in range(block)]
-                for row in range(top + r + 1)]
-        with m.If(admitted):
-            m.d.sync += [keep[row][c].eq(row_ok[row] & col_ok[c])
-                         for row in range(top + r + 1) for c in range(block)]
-        return tag, keep
+        # Per window of the column (one but with ``pixels``), row by row of the window.
+        keeps = []
+        for k in range(windows):
+            first = top - k - r
+            keep = [[Signal(name=f"keep_r{row}_c{c}" if k == 0 else f"keep{k}_r{row}_c{c}")
+                     for c in range(block)] for row in range(block)]
+            with m.If(admitted):
+                for row in range(block):
+                    inside = row_ok[first + row] if k == 0 else \
+                        Mux(old[k], prev_ok[first + row], row_ok[first + row])
+                    m.d.sync += [keep[row][c].eq(inside & col_ok[c]) for c in range(block)]
+            keeps.append(keep)
+        return tag, keeps

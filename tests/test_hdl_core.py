@@ -74,6 +74,20 @@ def test_two_frames_back_to_back(line_buffer):
     assert result["errors"] == 0
 
 
+@pytest.mark.parametrize("line_buffer", ["transforms", "pixels"])
+def test_second_frame_at_full_rate_sees_only_its_own_rows(line_buffer):
+    """A random pair right after a layered one, at full rate: the second frame's first rows
+    overlap the first one's last. Its first L/R-checked pixel depends on the right map near
+    column 0, whose cost words entered the stores before the aggregation centre reached the
+    new frame: with the rows above transformed from pixels, windows masked in the frame of
+    the aggregation centre instead of their own centre's made that pixel invalid (found by
+    cocotb under Verilator)."""
+    params = StereoParams(transform="census", block=5, disparities=8, rounds=2,
+                          lr_threshold=1, width=40, height=12, line_buffer=line_buffer)
+    pairs = [stereo_pair("random", 12, 40, 0), stereo_pair("layers", 12, 40, 0, 8)]
+    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]))
+
+
 @pytest.mark.parametrize("lr,aggregation", [(1, 1), (None, 3), (1, 3)])
 def test_frame_after_an_idle_gap(lr, aggregation):
     """A gap long enough for the flush to finish (the core goes idle): the next frame
