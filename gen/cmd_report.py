@@ -158,12 +158,14 @@ def sweep_pnr(params, pnr):
 def synthesis_tasks(configurations, targets, pnr, freq, timeout, cache, engine,
                     device=_DEFAULT_DEVICE):
     """``(reports from the cache, tasks for the rest)`` of a sweep: one :class:`Task` per
-    configuration not wholly in ``cache``, cheap cells first (ext. census takes many
-    times longer than the other three, and a sweep stopped early should hold as many
-    cells as possible). Only default line buffers are placed and routed (:func:`sweep_pnr`).
+    configuration not wholly in ``cache``: default line buffers first (what a user gets),
+    then cheap cells first (ext. census takes many times longer than the other three),
+    so that a sweep stopped early holds the cells that matter most. Only default line
+    buffers are placed and routed (:func:`sweep_pnr`).
     """
     cached, tasks = [], []
-    for p in sorted(configurations, key=lambda p: (p.transform == "ext-census", p.block,
+    for p in sorted(configurations, key=lambda p: (not is_default_line_buffer(p),
+                                                   p.transform == "ext-census", p.block,
                                                    p.stored_rows)):
         p_pnr = sweep_pnr(p, pnr)
         report = lookup(p, targets, p_pnr, freq, cache, device)
