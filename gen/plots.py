@@ -92,7 +92,7 @@ def sweep_plots(reports, out):
         The files written.
     """
     colours = dict(zip(TRANSFORMS, ("tab:blue", "tab:orange", "tab:green", "tab:red")))
-    styles = {"transforms": "o-", "costs": "s:", "auto": "o-"}
+    styles = {"auto": "o-", "transforms": "o-", "costs": "s:", "pixels": "^-."}
     panels = [("logic", "cyclonev", "logic", PAPER_LOGIC,
                "logic (ours: Cyclone V ALUTs, paper: Stratix II LEs)"),
               ("memory", "cyclonev", "memory_bits", PAPER_MEMORY, "memory bits")]

@@ -250,7 +250,9 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
     reports = [{"params": {"transform": "rank", "block": 7, "line_buffer": "transforms"},
                 "results": {"cyclonev": ok, "ecp5": placed}},
                {"params": {"transform": "rank", "block": 9, "line_buffer": "costs"},
-                "results": {"cyclonev": ok, "ecp5": too_big}}]
+                "results": {"cyclonev": ok, "ecp5": too_big}},
+               {"params": {"transform": "census", "block": 7, "line_buffer": "pixels"},
+                "results": {"cyclonev": ok, "ecp5": placed}}]
     text = sweep_markdown(reports)
     # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
     assert "| rank | 7x7 | transforms (default) | 5,087 | 40 | 10,174 | 0.50 |" in text
