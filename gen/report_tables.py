@@ -43,8 +43,8 @@ def format_table(report):
         if path:
             notes.append(f"{t} deepest register-to-register logic: {path.get('from')} -> "
                          f"{path.get('to')} ({r['logic_levels']:.1f} LUT levels)")
-    notes += [f"{t} critical path: {r['critical_path']}" for t, r in report["results"].items()
-              if r.get("critical_path")]
+    notes += [f"{t} critical path: {r['critical_path']}{_router_note(r)}"
+              for t, r in report["results"].items() if r.get("critical_path")]
     return "\n".join(lines + notes)
 
 
@@ -125,7 +125,7 @@ def sweep_markdown(reports):
     failures = [f"- {_name(r['params'])} {t}: {res['status']}: {res.get('message', '')}"
                 for r in reports for t, res in r["results"].items()
                 if res["status"] not in ("ok", "does not fit")]
-    paths = [f"- {_name(r['params'])}: {res['critical_path']}" for r in reports
+    paths = [f"- {_name(r['params'])}: {res['critical_path']}{_router_note(res)}" for r in reports
              for res in r["results"].values() if res.get("critical_path")]
     seconds = [f"- {_name(r['params'])} {t}: {res['seconds']:.0f} s"
                + (f" ({res['yosys_time_split']})" if res.get("yosys_time_split") else "")
@@ -137,3 +137,9 @@ def sweep_markdown(reports):
     if paths:
         text += "\nECP5 critical paths:\n\n" + "\n".join(paths) + "\n"
     return text + "\nSynthesis time per configuration (uncached run):\n\n" + "\n".join(seconds) + "\n"
+
+
+def _router_note(result):
+    """Said beside a critical path when nextpnr routed without timing-driven rip-up."""
+    router = result.get("router", "")
+    return f" ({router[len('router2 ('):-1]})" if router.startswith("router2 (") else ""

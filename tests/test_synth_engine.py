@@ -88,6 +88,42 @@ def test_timeout_kills_what_the_tool_started(tmp_path):
     assert not _processes_in(tmp_path)
 
 
+def _router_script(iterations, failing, then_sleep):
+    """A process writing router2's iteration lines (nextpnr 0.11's format) to
+    nextpnr.log, as a run with timing-driven rip-up does, then sleeping."""
+    line = ("Info:     iter={} wires=242623 overused=0 overuse=0 tmgfail=" + str(failing)
+            + " archfail=NA\n")
+    return [sys.executable, "-c",
+            "import time\n"
+            "with open('nextpnr.log', 'w') as log:\n"
+            f"    for i in range(1, {iterations} + 1):\n"
+            f"        log.write({line!r}.format(i)); log.flush()\n"
+            f"time.sleep({then_sleep})\n"]
+
+
+def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
+    """Thousands of arcs still failing after 100 iterations: nextpnr is stopped at once
+    (and with what it started), not after its 1,500 iterations."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    started = time.monotonic()
+    failure = synth._run(_router_script(120, 6860, 60), tmp_path, None, "out.log",
+                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    assert failure == ("timing-driven rip-up abandoned: 6,860 arcs missed the clock after "
+                       "120 iterations")
+    assert time.monotonic() - started < 10
+    time.sleep(0.2)
+    assert not _processes_in(tmp_path)
+
+
+@pytest.mark.parametrize("iterations, failing", [(99, 6860), (1500, 14)])
+def test_ripup_close_to_the_clock_or_early_runs_on(tmp_path, monkeypatch, iterations, failing):
+    """Before 100 iterations, or a few arcs short of the clock: the run is left alone."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    failure = synth._run(_router_script(iterations, failing, 0.5), tmp_path, None, "out.log",
+                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    assert failure is None
+
+
 def _processes_in(folder):
     """Processes whose working directory is ``folder`` (the tools run there)."""
     found = []
