@@ -138,12 +138,16 @@ def evaluation_latency(params):
     return params.rounds + min_tree_latency(params.rounds)
 
 
-#: Comparisons (or differences) with the window's centre that one copy of it feeds.
-CENTRE_FANOUT = 8
+#: Comparisons (rank, census) or differences (ext. rank, ext. census) with the window's
+#: centre that one copy of it feeds. A difference is an 8-bit carry chain per neighbour,
+#: a clock of its own with the copy's routing in front: at 8 per copy that routing was
+#: ext. rank 9x9's critical path (6.7 ns, 149.5 MHz on ECP5).
+CENTRE_FANOUT = {"rank": 8, "census": 8, "ext-rank": 4, "ext-census": 4}
 
 
 def centre_copies(params):
-    """Copies of each window's centre pixel, one per :data:`CENTRE_FANOUT` neighbours.
+    """Copies of each window's centre pixel, one per :data:`CENTRE_FANOUT` neighbours
+    (of the transform).
 
     The centre reaches all k comparisons (or differences) of a transform; as one register
     that fan-out was 5 ns of routing on ECP5 (rank 7x7). Each copy is loaded by a clock
@@ -152,7 +156,7 @@ def centre_copies(params):
     """
     if params.rounds == 1:
         return 1
-    return -(-params.neighbours // CENTRE_FANOUT)
+    return -(-params.neighbours // CENTRE_FANOUT[params.transform])
 
 
 #: Widest slice of a right-transform store with address counters of its own: an address
