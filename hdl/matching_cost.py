@@ -72,7 +72,8 @@ class MatchingCost(wiring.Component):
         differing = Signal(self.params.neighbours)
         m.d.comb += differing.eq(self.left ^ self.right)
         bits = [differing[n] for n in range(self.params.neighbours)]
-        # The XOR is a level of the plan (cost_plan): registered before the compressors.
+        # One LUT level in front of the compressors, far shorter than an adder level: not
+        # counted against the register spacing.
         return build_popcount(m, self.en, bits, self.plan)
 
     def _ext_census_cost(self, m):

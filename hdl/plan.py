@@ -109,18 +109,17 @@ def transform_plan(params, every=DEFAULT_EVERY):
 def cost_plan(params, every=DEFAULT_EVERY):
     """Register plan of the matching cost; ``sum()`` of it is the cost unit's latency.
 
-    The census cost's XOR in front of the popcount counts as a level: with the first full
-    adders behind it in the same clock it was two LUTs deep after the right word's
-    register (census 9x9 at 149.7 MHz on ECP5, 6.7 ns, mostly routing), so it is
-    registered on its own. The ext. census sum of absolute differences counts its
-    subtraction itself; rank and ext. rank costs are one absolute difference.
+    The census cost's XOR in front of the popcount is one LUT level, far shorter than an
+    adder level, and is not counted against the spacing; the ext. census sum of absolute
+    differences counts its subtraction itself; rank and ext. rank costs are one absolute
+    difference.
     """
     tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
     if tree is None and every and params.transform_bits > PAIRED_ADDER_BITS:
         # Both differences registered, then the choice: a wide comparison, two
         # subtractions and the multiplexer in one clock were 7.7 ns (ext. rank 9x9, ECP5).
         return [True, True]
-    return _unit_plan(tree, params, every, 0 if tree == "sad" else 1)
+    return _unit_plan(tree, params, every, 1 if tree is None else 0)
 
 
 def min_tree_clocks(params):
