@@ -141,5 +141,5 @@ def sweep_markdown(reports):
 
 def _router_note(result):
     """Said beside a critical path when nextpnr routed without timing-driven rip-up."""
-    router = result.get("router", "")
-    return f" ({router[len('router2 ('):-1]})" if router.startswith("router2 (") else ""
+    reason = result.get("ripup_abandoned")
+    return f" ({reason})" if reason else ""

@@ -27,8 +27,8 @@ is checked against the ECP5 part's capacity before place and route
 
 import importlib.util
 import json
-import re
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -220,8 +220,8 @@ def _run(command, cwd, deadline, log_name, watch=None):
                 if remaining is not None and remaining <= 0:
                     _kill_group(process)
                     return "timeout"
-                step = remaining if watch is None else min(remaining or _WATCH_SECONDS,
-                                                           _WATCH_SECONDS)
+                step = remaining if watch is None else min(_WATCH_SECONDS,
+                                                           remaining or _WATCH_SECONDS)
                 try:
                     returncode = process.wait(timeout=step)
                     break
@@ -450,9 +450,10 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
     failure = _run(command + ["--tmg-ripup"], build, deadline, "nextpnr.out",
                    watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
     result["router"] = "router2, timing-driven rip-up"
+    result["ripup_abandoned"] = None
     if failure is not None and failure.startswith(_HOPELESS):
         # The same placement (same seed and constraint) routed once, without rip-up.
-        result["router"] = f"router2 ({failure})"
+        result["router"], result["ripup_abandoned"] = "router2", failure
         shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
         failure = _run(command, build, deadline, "nextpnr.out")
     if failure is None:

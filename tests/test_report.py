@@ -253,8 +253,9 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                 "results": {"cyclonev": ok, "ecp5": too_big}},
                {"params": {"transform": "census", "block": 7, "line_buffer": "pixels"},
                 "results": {"cyclonev": ok, "ecp5": dict(
-                    placed, router="router2 (timing-driven rip-up abandoned: 6,860 arcs "
-                                   "missed the clock after 100 iterations)")}}]
+                    placed, router="router2",
+                    ripup_abandoned="timing-driven rip-up abandoned: 6,860 arcs missed the "
+                                    "clock after 100 iterations")}}]
     text = sweep_markdown(reports)
     # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
     assert "| rank | 7x7 | transforms (default) | 5,087 | 40 | 10,174 | 0.50 |" in text
