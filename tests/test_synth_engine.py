@@ -64,6 +64,20 @@ def test_yosys_error_is_a_failed_result(engine):
     assert "ERROR" in result["message"] and result["engine"] == engine
 
 
+def test_failed_place_and_route_keeps_the_synthesis_figures():
+    """nextpnr fails at once (more inputs than the package has pins, which the capacity
+    check does not count): the result still has what synthesis measured."""
+    pins = 400                  # the 85k in CABGA381 has 365 I/O sites
+    design = (f"module wide(input clk, input [{pins - 1}:0] a, output reg y);\n"
+              "  always @(posedge clk) y <= ^a;\nendmodule\n")
+    result = synthesise(design, "ecp5", "wide", pnr=True)
+    assert result["status"] == "failed" and "nextpnr" in result["message"]
+    assert result["fmax_mhz"] is None
+    assert result["logic"] > 0 and result["registers"] == 1 and result["utilisation"]["LUT"] > 0
+    # Yosys's own failure has no figures to keep.
+    assert "logic" not in synthesise("module broken(input a; endmodule\n", "ecp5", "broken")
+
+
 def test_native_timeout(tmp_path):
     params = StereoParams(transform="census", block=3, disparities=8, rounds=2, width=32,
                           height=8)
