@@ -259,20 +259,7 @@ class InputStage(wiring.Component):
         # counters) are two clocks' work, not one. The step uses flags registered from
         # the counters (x at the line end, rows below the saturation, the countdown's two
         # events) instead of comparing them on its way.
-        # The step's cases are decoded before they are registered: a jump to a new frame,
-        # a restart while the previous frame finishes, an advance otherwise. The advance
-        # has a register per group of counters it steps (columns, rows), each loaded by an
-        # enable of its own (slots.private_copy): start and overlap registered and decoded
-        # at every counter bit and flag fanned out to all of them (ext. rank 9x9 on ECP5,
-        # 6.8 ns; census 11x11, 8.4 ns).
         stepping = pipe(m, self.admit, 1, "stepping", reset=True)
-        jumps = self.start & ~self.overlap
-        jump = pipe(m, self.admit & jumps, 1, "stepping_jump", reset=True)
-        restart = pipe(m, self.admit & self.start & self.overlap, 1, "stepping_restart",
-                       reset=True)
-        advance_columns, advance_rows = (
-            slots.private_copy(self.admit & ~jumps, 0, copy, f"stepping_{group}")
-            for copy, group in enumerate(("columns", "rows")))
         x = Signal(layout["x"].shape, name="centre_x")
         y = Signal(layout["y"].shape, name="centre_y")
         window_y = Signal(layout["y"].shape, name="window_y")
@@ -336,13 +323,65 @@ class InputStage(wiring.Component):
             return [col_ok[o + r].eq(_column_inside_at(value, o, width)) for o in offsets] + \
                    [col_next.eq(_column_inside_at(value, r + 1, width))]
 
-        with m.If(jump):
-            # The previous frame is finished: jump to the new frame's coordinates.
-            # The rows' flags follow at once: the first line end may be the next step.
-            m.d.sync += [x.eq(first_x), y.eq(first_y), window_y.eq(first_y),
-                         live.eq(1), line_end.eq(first_x == width - 1),
+        # The step's cases, decoded in the admission's clock and registered: a jump to a
+        # new frame, a restart while the previous one finishes, an advance, a row step at
+        # a line end, the switch to the new frame. Each group of registers they step (the
+        # column counter and flags, the row counters, the row flags) has a copy of its
+        # own of each, loaded by an enable of its own (slots.private_copy): the cases
+        # decoded at every counter bit and flag fanned out to all of them (ext. rank 9x9
+        # on ECP5: 6.8 ns; census 11x11: 8.4 ns; census 9x9, the row step: 7.3 ns, 5.3 of
+        # them routing). The registers the cases read do not change between the
+        # admission and the step: steps are a slot apart (R >= 2), and a room flag is a
+        # clock late only right after a row step, whose next step is no line end. With
+        # R = 1 a step can follow the previous one at once: the cases are decoded in the
+        # step's own clock.
+        if p.rounds > 1:
+            def when(case, copy, name):
+                return slots.private_copy(self.admit & case(self.start, self.overlap), 0,
+                                          copy, f"stepping_{name}")
+        else:
+            start = pipe(m, self.start, 1, "stepping_start", reset=True)
+            overlap = pipe(m, self.overlap, 1, "stepping_overlap", reset=True)
+
+            def when(case, copy, name):
+                return stepping & case(start, overlap)
+
+        def jump(start, overlap):
+            return start & ~overlap
+
+        def advance(start, overlap):
+            return ~jump(start, overlap)
+
+        def row_step(start, overlap):
+            return advance(start, overlap) & line_end & window_room
+
+        def switching(start, overlap):
+            return advance(start, overlap) & switch_window
+
+        jump_columns, jump_counters, jump_flags = (
+            when(jump, copy, f"jump_{group}")
+            for copy, group in enumerate(("columns", "counters", "flags")))
+        advance_columns = when(advance, 3, "advance_columns")
+        row_step_counters, row_step_flags = (
+            when(row_step, 4 + copy, f"row_step_{group}")
+            for copy, group in enumerate(("counters", "flags")))
+        switch_counters, switch_flags = (
+            when(switching, 6 + copy, f"switch_{group}")
+            for copy, group in enumerate(("counters", "flags")))
+        y_step = when(lambda s, o: advance(s, o) & line_end & y_room, 8, "y_step")
+        switch_tag_step = when(lambda s, o: advance(s, o) & switch_tag, 9, "switch_tag")
+        restart = when(lambda s, o: s & o, 10, "restart")
+
+        # The previous frame is finished: jump to the new frame's coordinates. The rows'
+        # flags follow at once: the first line end may be the next step.
+        with m.If(jump_columns):
+            m.d.sync += [x.eq(first_x), line_end.eq(first_x == width - 1)]
+            m.d.sync += columns_at(first_x)
+        with m.If(jump_counters):
+            m.d.sync += [y.eq(first_y), window_y.eq(first_y), live.eq(1),
                          y_room.eq(first_y < highest), window_room.eq(first_y < highest)]
-            m.d.sync += rows_at(first_y) + columns_at(first_x)
+        with m.If(jump_flags):
+            m.d.sync += rows_at(first_y)
         with m.If(advance_columns):
             m.d.sync += [x.eq(Mux(line_end, 0, x + 1)),
                          line_end.eq(~line_end & (x == width - 2))]
@@ -352,34 +391,34 @@ class InputStage(wiring.Component):
                 m.d.sync += [col_ok[i].eq(col_ok[i + 1]) for i in range(2 * r)]
                 m.d.sync += [col_ok[2 * r].eq(col_next),
                              col_next.eq(column_inside(x, r + 2, width))]
-        with m.If(advance_rows):
-            with m.If(line_end & y_room):
-                m.d.sync += y.eq(y + 1)
-            with m.If(line_end & window_room):
-                m.d.sync += window_y.eq(window_y + 1)
-                m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(top + r)]
-                m.d.sync += row_ok[top + r].eq(row_next)
-                if windows > 1:
-                    m.d.sync += [prev_ok[i].eq(prev_ok[i + 1]) for i in range(top + r)]
-                    m.d.sync += prev_ok[top + r].eq(prev_next)
-                    # window_y + 1 < k is window_y < k - 1: the flags shift (old[0]
-                    # stays 0), no comparison of the incremented counter (12 LUT
-                    # levels on ECP5, census 7x7's critical path at 147 MHz).
-                    m.d.sync += [old[k].eq(old[k - 1]) for k in range(1, windows)]
-            # The window centre reaches the new frame's pixel (0, 0), then the
-            # aggregation centre does (the window centre is at (a, a) then); x agrees
-            # in both frames.
-            with m.If(switch_window):
-                m.d.sync += [window_y.eq(0), window_room.eq(0 < highest)]
-                m.d.sync += rows_at(0)
-            with m.If(switch_tag):
-                m.d.sync += [y.eq(a), live.eq(1), y_room.eq(a < highest)]
-        with m.If(stepping):
-            with m.If(restart):
-                m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
-                             switch_window.eq(tag_lag == window_event),
-                             switch_tag.eq(tag_lag == 1)]
-            with m.Elif(pending):
+        with m.If(y_step):
+            m.d.sync += y.eq(y + 1)
+        with m.If(row_step_counters):
+            m.d.sync += window_y.eq(window_y + 1)
+        with m.If(row_step_flags):
+            m.d.sync += [row_ok[i].eq(row_ok[i + 1]) for i in range(top + r)]
+            m.d.sync += row_ok[top + r].eq(row_next)
+            if windows > 1:
+                m.d.sync += [prev_ok[i].eq(prev_ok[i + 1]) for i in range(top + r)]
+                m.d.sync += prev_ok[top + r].eq(prev_next)
+                # window_y + 1 < k is window_y < k - 1: the flags shift (old[0] stays 0),
+                # no comparison of the incremented counter (12 LUT levels on ECP5, census
+                # 7x7's critical path at 147 MHz).
+                m.d.sync += [old[k].eq(old[k - 1]) for k in range(1, windows)]
+        # The window centre reaches the new frame's pixel (0, 0), then the aggregation
+        # centre does (the window centre is at (a, a) then); x agrees in both frames.
+        with m.If(switch_counters):
+            m.d.sync += [window_y.eq(0), window_room.eq(0 < highest)]
+        with m.If(switch_flags):
+            m.d.sync += rows_at(0)
+        with m.If(switch_tag_step):
+            m.d.sync += [y.eq(a), live.eq(1), y_room.eq(a < highest)]
+        with m.If(restart):
+            m.d.sync += [countdown.eq(tag_lag), pending.eq(1),
+                         switch_window.eq(tag_lag == window_event),
+                         switch_tag.eq(tag_lag == 1)]
+        with m.Elif(stepping):
+            with m.If(pending):
                 # pending is countdown != 0, switch_tag is countdown == 1: registers, not
                 # comparisons of the countdown in front of its own enable.
                 m.d.sync += [countdown.eq(countdown - 1), pending.eq(~switch_tag),
