@@ -347,8 +347,6 @@ class NpStereoCore(wiring.Component):
 
         m.d.sync += outstanding.eq(outstanding + (admit & start) - frame_done)
 
-        # The decision's registers: round 0 of the next slot.
-        admitted, started, overlapping = Signal(), Signal(), Signal()
         # The pixels leave the queue unchanged and are zeroed (dummy positions) two clocks
         # later, by a flag registered with them twice: the decision's register reached the
         # pixels' multiplexers by the line buffers across the core (census 9x9 and ext.
@@ -356,11 +354,11 @@ class NpStereoCore(wiring.Component):
         raw = pipe(m, head_pixels, 2, "raw_pixels")
         taken = pipe(m, take, 2, "taken")
         pixels = Signal(16, reset_less=True)
-        m.d.sync += [admitted.eq(admit), started.eq(start), overlapping.eq(overlap),
-                     pixels.eq(Mux(taken, raw, 0))]
+        m.d.sync += pixels.eq(Mux(taken, raw, 0))
 
         m.d.comb += [
-            inp.admit.eq(admitted), inp.start.eq(started), inp.overlap.eq(overlapping),
+            # The decision itself: the input stage registers it where it is used.
+            inp.admit.eq(admit), inp.start.eq(start), inp.overlap.eq(overlap),
             inp.left.eq(pixels[:8]), inp.right.eq(pixels[8:]),
             inp.first.eq(first), inp.round.eq(round_),
             calc.window_left.eq(inp.window_left), calc.window_right.eq(inp.window_right),

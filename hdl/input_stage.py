@@ -71,14 +71,15 @@ class InputStage(wiring.Component):
     Attributes
     ----------
     admit : In(1)
-        This clock is round 0 of a slot that carries a position: take ``left``/``right``.
+        The admission's decision: the next clock is round 0 of a slot that carries a
+        position (take ``left``/``right``).
     start : In(1)
         With ``admit``: the pixel is (0, 0) of a new frame (restarts the column counter).
     overlap : In(1)
         With ``start``: the previous frame still has centres to compute (it was not
         flushed): keep its coordinates until the new frame's first centre.
     left, right : In(8)
-        The pixels of the admitted position (0 for dummy positions), two clocks after
+        The pixels of the admitted position (0 for dummy positions), three clocks after
         ``admit``.
     first, round : In
         Round 0 pulse and round of the slot timing at the admission offset.
@@ -125,11 +126,16 @@ class InputStage(wiring.Component):
         top = rows - 1 - r
         m = Module()
         slots = SlotClock(m, self.first, self.round, p.rounds, "input")
+        # The decision, registered here: round 0 of the admitted slot. It arrives a clock
+        # ahead so that the centre's groups of registers take copies of their own of it
+        # (_centre).
+        admit = pipe(m, self.admit, 1, "admit", reset=True)
+        start = pipe(m, self.start, 1, "start", reset=True)
 
         # Column of the admitted pixel: the line buffers' address. A start restarts it at
         # 0 (one multiplexer level in front of the block RAM's address, from registers).
         col = Signal(range(width))
-        address = Mux(self.start, 0, col)
+        address = Mux(start, 0, col)
         # col == W - 1 as a flag registered from the counter (it changes once per slot,
         # R >= 2 clocks apart), not a comparison behind the start's multiplexer (census
         # 9x9 on ECP5: 6.9 ns); a start moves to column 1 (W > 2 always).
@@ -138,12 +144,12 @@ class InputStage(wiring.Component):
             m.d.sync += line_end.eq(col == width - 1)
         else:
             line_end = col == width - 1
-        with m.If(self.admit):
-            m.d.sync += col.eq(Mux(self.start, 1, Mux(line_end, 0, col + 1)))
+        with m.If(admit):
+            m.d.sync += col.eq(Mux(start, 1, Mux(line_end, 0, col + 1)))
 
         # Two clocks later the line buffers' rows of that column have left the block RAM
         # and its output register; the pixel, the address and the flags wait for them.
-        admitted = pipe(m, self.admit, 2, "admitted", reset=True)
+        admitted = pipe(m, admit, 2, "admitted", reset=True)
         written_address = pipe(m, address, 2, "written_address")
 
         tag, keeps = self._centre(m, slots)
@@ -178,7 +184,7 @@ class InputStage(wiring.Component):
             # 9x9 on ECP5), one per column still 7 ns (rank 9x9).
             groups = [(c, low, min(rows, low + SHIFT_ROWS)) for c in range(block)
                       for low in range(0, rows, SHIFT_ROWS)]
-            early = [slots.private_copy(self.admit, 0, g, f"{name}_shift_early{g}")
+            early = [slots.private_copy(admit, 0, g, f"{name}_shift_early{g}")
                      for g in range(-(-len(groups) // SHIFT_FANOUT))]
             arriving = Cat(*reversed(older), newest_pixel)
             for g, (c, low, high) in enumerate(groups):
@@ -259,7 +265,7 @@ class InputStage(wiring.Component):
         # counters) are two clocks' work, not one. The step uses flags registered from
         # the counters (x at the line end, rows below the saturation, the countdown's two
         # events) instead of comparing them on its way.
-        stepping = pipe(m, self.admit, 1, "stepping", reset=True)
+        stepping = pipe(m, self.admit, 2, "stepping", reset=True)
         x = Signal(layout["x"].shape, name="centre_x")
         y = Signal(layout["y"].shape, name="centre_y")
         window_y = Signal(layout["y"].shape, name="window_y")
@@ -323,28 +329,43 @@ class InputStage(wiring.Component):
             return [col_ok[o + r].eq(_column_inside_at(value, o, width)) for o in offsets] + \
                    [col_next.eq(_column_inside_at(value, r + 1, width))]
 
-        # The step's cases, decoded in the admission's clock and registered: a jump to a
-        # new frame, a restart while the previous one finishes, an advance, a row step at
-        # a line end, the switch to the new frame. Each group of registers they step (the
-        # column counter and flags, the row counters, the row flags) has a copy of its
-        # own of each, loaded by an enable of its own (slots.private_copy): the cases
-        # decoded at every counter bit and flag fanned out to all of them (ext. rank 9x9
-        # on ECP5: 6.8 ns; census 11x11: 8.4 ns; census 9x9, the row step: 7.3 ns, 5.3 of
-        # them routing). The registers the cases read do not change between the
-        # admission and the step: steps are a slot apart (R >= 2), and a room flag is a
-        # clock late only right after a row step, whose next step is no line end. With
-        # R = 1 a step can follow the previous one at once: the cases are decoded in the
-        # step's own clock.
+        # The step's cases, decoded in the admitted slot's round 0 and registered: a jump
+        # to a new frame, a restart while the previous one finishes, an advance, a row
+        # step at a line end, the switch to the new frame. Each group of registers they
+        # step (the column counter and flags, the row counters, the row flags) decodes
+        # them from copies of its own of the decision, taken a clock earlier (by an
+        # enable of its own, slots.private_first): decoded at every counter bit and flag,
+        # they fanned out to all of them (ext. rank 9x9 on ECP5: 6.8 ns; census 11x11:
+        # 8.4 ns), and decoded once from the core's decision register, that one decoder
+        # drove every group's register (census 9x9: 7.2 ns, 3.9 of them one wire). The
+        # registers the cases read do not change between round 0 and the step: steps are
+        # a slot apart (R >= 2), and a room flag is a clock late only right after a row
+        # step, whose next step is no line end. With R = 1 a step can follow the previous
+        # one at once: the cases are decoded in the step's own clock.
         if p.rounds > 1:
-            def when(case, copy, name):
-                return slots.private_copy(self.admit & case(self.start, self.overlap), 0,
-                                          copy, f"stepping_{name}")
-        else:
-            start = pipe(m, self.start, 1, "stepping_start", reset=True)
-            overlap = pipe(m, self.overlap, 1, "stepping_overlap", reset=True)
+            def decision(copy, group):
+                first = slots.private_first(-1, copy, f"decision_{group}_round")
+                copies = [Signal(name=f"decision_{group}_{flag}")
+                          for flag in ("admit", "start", "overlap")]
+                m.d.sync += [register.eq(value & first) for register, value in
+                             zip(copies, (self.admit, self.start, self.overlap))]
+                return copies
 
-            def when(case, copy, name):
-                return stepping & case(start, overlap)
+            def when(flags, case, name):
+                admit, start, overlap = flags
+                return pipe(m, admit & case(start, overlap), 1, f"stepping_{name}",
+                            reset=True)
+        else:
+            step_flags = [stepping] + [pipe(m, value, 2, f"stepping_{flag}", reset=True)
+                                       for value, flag in ((self.start, "start"),
+                                                           (self.overlap, "overlap"))]
+
+            def decision(copy, group):
+                return step_flags
+
+            def when(flags, case, name):
+                admit, start, overlap = flags
+                return admit & case(start, overlap)
 
         def jump(start, overlap):
             return start & ~overlap
@@ -358,19 +379,21 @@ class InputStage(wiring.Component):
         def switching(start, overlap):
             return advance(start, overlap) & switch_window
 
-        jump_columns, jump_counters, jump_flags = (
-            when(jump, copy, f"jump_{group}")
-            for copy, group in enumerate(("columns", "counters", "flags")))
-        advance_columns = when(advance, 3, "advance_columns")
-        row_step_counters, row_step_flags = (
-            when(row_step, 4 + copy, f"row_step_{group}")
-            for copy, group in enumerate(("counters", "flags")))
-        switch_counters, switch_flags = (
-            when(switching, 6 + copy, f"switch_{group}")
-            for copy, group in enumerate(("counters", "flags")))
-        y_step = when(lambda s, o: advance(s, o) & line_end & y_room, 8, "y_step")
-        switch_tag_step = when(lambda s, o: advance(s, o) & switch_tag, 9, "switch_tag")
-        restart = when(lambda s, o: s & o, 10, "restart")
+        columns, counters, flags, control = (
+            decision(copy, group)
+            for copy, group in enumerate(("columns", "counters", "flags", "control")))
+        jump_columns = when(columns, jump, "jump_columns")
+        advance_columns = when(columns, advance, "advance_columns")
+        jump_counters = when(counters, jump, "jump_counters")
+        row_step_counters = when(counters, row_step, "row_step_counters")
+        switch_counters = when(counters, switching, "switch_counters")
+        y_step = when(counters, lambda s, o: advance(s, o) & line_end & y_room, "y_step")
+        switch_tag_step = when(counters, lambda s, o: advance(s, o) & switch_tag,
+                               "switch_tag")
+        jump_flags = when(flags, jump, "jump_flags")
+        row_step_flags = when(flags, row_step, "row_step_flags")
+        switch_flags = when(flags, switching, "switch_flags")
+        restart = when(control, lambda s, o: s & o, "restart")
 
         # The previous frame is finished: jump to the new frame's coordinates. The rows'
         # flags follow at once: the first line end may be the next step.
