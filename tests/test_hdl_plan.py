@@ -69,7 +69,8 @@ def measured_flush(params):
             if offering and ctx.get(core.s_axis_tready):
                 index += 1
             if ctx.get(core.input_stage.admit):
-                events["admitted"].append(clock)
+                # The admission's decision: its slot starts in the next clock.
+                events["admitted"].append(clock + 1)
             lr = core.lr_check
             if (ctx.get(lr.produce) and ctx.get(lr.x) == params.width - 1
                     and ctx.get(lr.y) == params.height - 1):
