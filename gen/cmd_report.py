@@ -86,14 +86,19 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, e
     return _report(params, digest, results)
 
 
-def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=_DEFAULT_DEVICE):
+def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=_DEFAULT_DEVICE,
+           partial=False):
     """The report :func:`evaluate` would give, from ``cache`` alone (nothing generated or
-    synthesised), or None when any of it is not there."""
+    synthesised), or None when any of it is not there. With ``partial``: the targets that
+    are there, or None when none is."""
     digest = None if cache is None else memoised_digest(params, cache)
     if digest is None:
         return None
     results = {t: read_result(_path(cache, params, t, pnr, freq, digest, device))
                for t in targets}
+    if partial:
+        results = {t: r for t, r in results.items() if r is not None}
+        return _report(params, digest, results) if results else None
     if any(r is None for r in results.values()):
         return None
     return _report(params, digest, results)
@@ -186,14 +191,24 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progre
     on stderr and a line per finished configuration.
 
     What the cache holds is not submitted. ``progress(reports)`` is called with the
-    reports so far after each configuration, so a long sweep leaves its partial results
-    behind.
+    reports so far before the first task and after each configuration, so a long sweep
+    leaves its partial results behind; a configuration still to run is among them with the
+    targets the cache holds of it (the others absent), if any.
     """
     reports, tasks = synthesis_tasks(configurations, targets, pnr, freq, timeout, cache,
                                      engine)
     for report in reports:
         print(f"{StereoParams(**report['params']).describe()}: {_status_line(report)}",
               file=sys.stderr)
+    # What the cache already holds of the configurations still to run (a target another
+    # sweep measured): in the document until their task finishes, so a sweep stopped early
+    # shows every figure there is.
+    partial = {task.key: lookup(task.args[0], targets, sweep_pnr(task.args[0], pnr), freq,
+                                cache, partial=True) for task in tasks}
+
+    def so_far():
+        return _in_order(reports + [r for r in partial.values() if r is not None],
+                         configurations)
 
     def finished(task, report, write):
         if isinstance(report, TaskFailure):  # the task killed its workers
@@ -201,9 +216,12 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progre
         store_report(report, cache, sweep_pnr(StereoParams(**report["params"]), pnr), freq)
         write(f"{task.label}: {_status_line(report)}")
         reports.append(report)
+        partial.pop(task.key)
         if progress is not None:
-            progress(_in_order(reports, configurations))
+            progress(so_far())
 
+    if progress is not None and tasks:
+        progress(so_far())
     run_tasks(client, tasks, "synthesis", on_result=finished)
     return _in_order(reports, configurations)
 

@@ -307,6 +307,43 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     assert report_cache.seed_cache(sweep, tmp_path / "other") == 1
 
 
+def test_sweep_document_shows_what_the_cache_holds_of_unfinished_cells(tmp_path):
+    """A configuration whose Cyclone V result is cached (another sweep measured it) but
+    whose ECP5 result is not is in the document before its task runs: Cyclone V figures,
+    ECP5 "not run"."""
+    params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
+    cache = tmp_path / "cache"
+    measured = {"target": "cyclonev", "status": "ok", "logic": 321, "registers": 10,
+                "block_rams": 1, "lut_rams": 2, "memory_bits": 99, "ffram_bits": 0,
+                "logic_levels": 3.0, "fmax_mhz": None, "seconds": 1.0}
+    digest = report_cache.configuration_digest(params, cache)
+    report_cache.store_result(cmd_report._path(cache, params, "cyclonev", False, 150.0,
+                                               digest, "ecp5-85k"), measured)
+    assert cmd_report.lookup(params, ("cyclonev", "ecp5"), True, 150.0, cache) is None
+    partial = cmd_report.lookup(params, ("cyclonev", "ecp5"), True, 150.0, cache,
+                                partial=True)
+    assert list(partial["results"]) == ["cyclonev"]
+    assert partial["results"]["cyclonev"]["logic"] == 321
+    assert cmd_report.lookup(params.replace(block=5), ("cyclonev",), True, 150.0, cache,
+                             partial=True) is None
+
+    written = []
+
+    class Stop(Exception):
+        pass
+
+    def progress(reports):           # the document before the first task runs
+        written.append(reports)
+        raise Stop
+    with pytest.raises(Stop):
+        cmd_report.run_sweep([params], ("cyclonev", "ecp5"), True, 150.0, None, cache,
+                             client=None, progress=progress)
+    [[report]] = written
+    assert report["results"]["cyclonev"]["logic"] == 321 and "ecp5" not in report["results"]
+    text = sweep_markdown([dict(report, params=dict(report["params"], block=7))])
+    assert "| 321 |" in text and "| not run | - | 100 |" in text
+
+
 #: Figures of a synthesis result that must not depend on where it ran.
 FIGURES = ("status", "logic", "registers", "block_rams", "lut_rams", "memory_bits",
            "ffram_bits", "memories", "logic_levels", "message")
