@@ -193,20 +193,13 @@ class NpStereoCore(wiring.Component):
         # levels, from the output port's level through the FIFO's read to the counter).
         back = Signal(2, name="credits_back")
         m.d.sync += back.eq((queue.r_rdy & port_ready) + (lr.retire & ~lr.produce))
-        if rounds > 1:
-            # The decision is a register here (the proposal's): one adder of the change,
-            # -1 .. 2 (two adders and a multiplexer behind the returned credits were 6.7 ns,
-            # census 7x7 on ECP5).
-            change = Signal(range(-1, 3), name="credits_change")
-            m.d.comb += change.eq(back - admit)
-            m.d.sync += credits.eq(credits + change)
-        else:
-            returned = credits + back
-            kept = Signal(range(self.queue_depth + 3), name="credits_kept")
-            taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
-            m.d.comb += [kept.eq(returned), taken.eq(returned - 1)]
-            m.d.sync += credits.eq(Mux(admit, taken, kept))
-        m.d.sync += has_credit.eq(_has_room(credits))
+        # (The change, returned minus taken, in one adder put the decision, a register of
+        # wide fan-out, in front of the carry chain: census 9x9, 7.5 ns.)
+        returned = credits + back
+        kept = Signal(range(self.queue_depth + 3), name="credits_kept")
+        taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
+        m.d.comb += [kept.eq(returned), taken.eq(returned - 1)]
+        m.d.sync += [credits.eq(Mux(admit, taken, kept)), has_credit.eq(_has_room(credits))]
 
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
