@@ -179,6 +179,7 @@ class NpStereoCore(wiring.Component):
             word.user.eq(lr.frame_start), word.last.eq(lr.line_end),
         ]
         admit = Signal()        # the decision of this clock: the next slot has a position
+        credit_taken = Signal()  # the same, from the credits' copy of the decision
         credits = Signal(range(self.queue_depth + 1), init=self.queue_depth)
         has_credit = Signal(init=1)
         # Credits come back when a word leaves the queue or a position retires without
@@ -198,12 +199,16 @@ class NpStereoCore(wiring.Component):
         kept = Signal(range(self.queue_depth + 3), name="credits_kept")
         taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
         m.d.comb += [kept.eq(returned), taken.eq(returned - 1)]
-        m.d.sync += [credits.eq(Mux(admit, taken, kept)), has_credit.eq(_has_room(credits))]
+        m.d.sync += [credits.eq(Mux(credit_taken, taken, kept)),
+                     has_credit.eq(_has_room(credits))]
 
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
         outstanding = Signal(range(8))
-        frame_done = lr.produce & lr.frame_end
+        # The last word's pulse is registered where the L/R check makes it, a clock late
+        # (a flush then ends a clock later): the counter sits between the admission and
+        # the output, and its adder took the pulse's own logic across the core.
+        frame_done = pipe(m, lr.produce & lr.frame_end, 1, "frame_done", reset=True)
 
         # Framing and admission. An explicit state register and if/else chains rather
         # than m.FSM: Amaranth's FSM emits partial case statements that Verilator's lint
@@ -304,20 +309,30 @@ class NpStereoCore(wiring.Component):
                 m.d.comb += start_frame(1)
             with m.Else():
                 m.d.comb += proposed.admit.eq(given.credit)
-        chosen = Signal(proposal)
         if rounds == 1:
-            m.d.comb += chosen.eq(proposed)
+            def decision(group, copy):
+                return proposed
         else:
-            # Loaded in round R-2 (a clock enable, no logic) and used only in round R-1.
-            # Registered as the proposal in round R-2 and as nothing in every other
-            # round, so the register itself is the decision of round R-1: no slot pulse
-            # and no multiplexer between it and what it drives (ext. rank 7x7 on ECP5:
-            # 7.6 ns from the slot pulse through the decision to the row flags).
-            latched = Signal(proposal, name="proposal")
-            m.d.sync += latched.eq(Mux(slots.first(rounds - 2), proposed, 0))
-            m.d.comb += chosen.eq(latched)
+            def decision(group, copy):
+                # Loaded in round R-2 (a clock enable, no logic) and used only in round
+                # R-1. Registered as the proposal in round R-2 and as nothing in every
+                # other round, so the register itself is the decision of round R-1: no
+                # slot pulse and no multiplexer between it and what it drives (ext. rank
+                # 7x7 on ECP5: 7.6 ns from the slot pulse through the decision to the row
+                # flags). Each group of registers it steps has a copy of its own, loaded
+                # by an enable of its own (slots.private_first) so that synthesis keeps
+                # the copies apart: the framing logic sits by the input pins, the credits
+                # and the count of frames in flight by the output, and one decision
+                # register between them was 7.9 ns, two LUTs (census 9x9 on ECP5).
+                latched = Signal(proposal, name=f"decision_{group}")
+                first = slots.private_first(rounds - 2, copy, f"decision_{group}_round")
+                m.d.sync += latched.eq(Mux(first, proposed, 0))
+                return latched
+        chosen = decision("framing", 0)
+        counted = decision("credits", 1)
+        flight = decision("flight", 2)
+        handed = decision("input", 3)
         take = chosen.take        # the admitted position is the head pixel (else zeros)
-        start, overlap = chosen.start, chosen.overlap
         error = Signal()
         m.d.sync += self.framing_error.eq(error)
         m.d.comb += [admit.eq(chosen.admit), pop.eq(chosen.pop), error.eq(chosen.error)]
@@ -335,7 +350,7 @@ class NpStereoCore(wiring.Component):
         else:
             second_last_column = column == width - 2
         with m.If(admit):
-            with m.If(start):
+            with m.If(chosen.start):
                 m.d.sync += [column.eq(1), row.eq(0), line_start.eq(0),
                              end_of_line.eq(width == 2), last_row.eq(height == 1)]
             with m.Else():
@@ -346,7 +361,8 @@ class NpStereoCore(wiring.Component):
                     m.d.sync += [row.eq(Mux(end_of_frame, 0, row + 1)),
                                  last_row.eq(~end_of_frame & second_last_row)]
 
-        m.d.sync += outstanding.eq(outstanding + (admit & start) - frame_done)
+        m.d.comb += credit_taken.eq(counted.admit)
+        m.d.sync += outstanding.eq(outstanding + (flight.admit & flight.start) - frame_done)
 
         # The pixels leave the queue unchanged and are zeroed (dummy positions) two clocks
         # later, by a flag registered with them twice: the decision's register reached the
@@ -359,7 +375,7 @@ class NpStereoCore(wiring.Component):
 
         m.d.comb += [
             # The decision itself: the input stage registers it where it is used.
-            inp.admit.eq(admit), inp.start.eq(start), inp.overlap.eq(overlap),
+            inp.admit.eq(handed.admit), inp.start.eq(handed.start), inp.overlap.eq(handed.overlap),
             inp.left.eq(pixels[:8]), inp.right.eq(pixels[8:]),
             inp.first.eq(first), inp.round.eq(round_),
             calc.window_left.eq(inp.window_left), calc.window_right.eq(inp.window_right),

@@ -158,7 +158,7 @@ class InputStage(wiring.Component):
         admitted = pipe(m, admit, 2, "admitted", reset=True)
         written_address = pipe(m, address, 2, "written_address")
 
-        tag, keeps = self._centre(m, slots)
+        tag, keeps = self._centre(m, slots, admit, start)
         # First row (in the column) of window k, k rows above the newest.
         firsts = [top - k - r for k in range(windows)]
         for name, pixel in (("left", self.left), ("right", self.right)):
@@ -238,7 +238,7 @@ class InputStage(wiring.Component):
         m.d.comb += self.tag.eq(slots.delay(tag, SHIFTED, LATENCY - SHIFTED, "window_tag"))
         return m
 
-    def _centre(self, m, slots):
+    def _centre(self, m, slots, admit, start):
         """The centre's tag and the window masks, updated with the window.
 
         The tag is slot-aligned at offset SHIFTED (the stage delays it further with
@@ -252,6 +252,9 @@ class InputStage(wiring.Component):
         transforms masks rows and columns relative to that centre: the finishing frame's
         last aggregation window must see the new frame's first row as outside. So the tag
         switches to the new frame a*W + a positions after the window masks do.
+
+        ``admit`` and ``start`` are the stage's registers of the decision (round 0 of the
+        admitted slot).
 
         Returns the tag register and, per window of the column (the newest first),
         ``keep[row][column]``, 1 where the window pixel lies inside the window centre's
@@ -271,7 +274,7 @@ class InputStage(wiring.Component):
         # counters) are two clocks' work, not one. The step uses flags registered from
         # the counters (x at the line end, rows below the saturation, the countdown's two
         # events) instead of comparing them on its way.
-        stepping = pipe(m, self.admit, 2, "stepping", reset=True)
+        stepping = pipe(m, admit, 1, "stepping", reset=True)
         x = Signal(layout["x"].shape, name="centre_x")
         y = Signal(layout["y"].shape, name="centre_y")
         window_y = Signal(layout["y"].shape, name="window_y")
@@ -362,9 +365,8 @@ class InputStage(wiring.Component):
                 return pipe(m, admit & case(start, overlap), 1, f"stepping_{name}",
                             reset=True)
         else:
-            step_flags = [stepping] + [pipe(m, value, 2, f"stepping_{flag}", reset=True)
-                                       for value, flag in ((self.start, "start"),
-                                                           (self.overlap, "overlap"))]
+            step_flags = [stepping, pipe(m, start, 1, "stepping_start", reset=True),
+                          pipe(m, self.overlap, 2, "stepping_overlap", reset=True)]
 
             def decision(copy, group):
                 return step_flags
