@@ -19,14 +19,14 @@ by a register per step of the skew, so no control signal fans out to every unit.
 end unit i's sums wait S - s_i clocks, and all units' sums leave together.
 """
 
-from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
+from amaranth.hdl import Array, Cat, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
-from .plan import (aggregation_latency, horizontal_plan, unit_skews, vertical_bits,
-                   vertical_clocks, vertical_plan)
+from .plan import (aggregation_latency, cost_banks, horizontal_plan, unit_skews,
+                   vertical_bits, vertical_clocks, vertical_plan)
 from .trees import DEFAULT_EVERY, build_sum
 
 __all__ = ["Aggregation"]
@@ -123,11 +123,11 @@ class Aggregation(wiring.Component):
     def _vertical(self, m, slots, costs):
         """Column sums over rows y - 2a .. y from a block RAM of the A-1 rows above.
 
-        Word (x, j) of unit i's memory (address x*R + j) holds the costs of disparity
-        i*R + j at column x for the A-1 rows above; every round reads it and writes it
-        back shifted by one row. A column's word is read again only a row later, long
-        after the write-back (three clocks after the read), and never in the clock it is
-        written: no collision logic (no_rw_check).
+        Word (x, j) of unit i's memory (address x*R + j, in banks of plan.cost_banks)
+        holds the costs of disparity i*R + j at column x for the A-1 rows above; every
+        round reads it and writes it back shifted by one row. A column's word is
+        read again only a row later, long after the write-back (three clocks after the
+        read), and never in the clock it is written: no collision logic (no_rw_check).
         """
         p = self.params
         rows, bits, rounds = p.aggregation - 1, p.cost_bits, p.rounds
@@ -144,26 +144,41 @@ class Aggregation(wiring.Component):
         # stage).
         inside = [Signal(name=f"row_ok{k}") for k in range(rows + 1)]
         m.d.sync += [ok.eq(_row_inside(tag.y, k, p.height)) for k, ok in enumerate(inside)]
-        inside = [slots.delay(ok, 1, 3, f"row_ok{k}", reset_less=True)
+        inside = [slots.delay(ok, 1, 4, f"row_ok{k}", reset_less=True)
                   for k, ok in enumerate(inside)]
         reading = slots.delay(tag.valid, 0, 2, "cost_lines_reading")
-        written = slots.delay(reading, 2, 2, "cost_lines_written")
+        written = slots.delay(reading, 2, 3, "cost_lines_written")
         control = _Chain(m, self.skews, "cost_lines")
+        banks = cost_banks(p)
         sums = []
         for i, cost in enumerate(costs):
-            m.submodules[f"cost_lines{i}"] = lines = Memory(
-                shape=unsigned(rows * bits), depth=p.width * rounds, init=[],
-                attrs={"no_rw_check": 1})
-            read, write = lines.read_port(domain="sync"), lines.write_port()
             unit_address, unit_reading, unit_written, *unit_inside = control.unit(
                 i, address, reading, written, *inside)
-            m.d.comb += [read.addr.eq(unit_address), read.en.eq(unit_reading)]
-            stored_word = pipe(m, read.data, 1, f"cost_lines{i}_read")
+            # Bank b holds words b*COST_BANK ..: every bank reads at the low bits, its
+            # output register (the block RAM's own) holds the word, and the bank is
+            # chosen behind those registers.
+            low = (banks[0] - 1).bit_length() if len(banks) > 1 else len(unit_address)
+            write_address = pipe(m, unit_address, 3, f"cost_lines{i}_write_address")
+            newest = pipe(m, cost, 5, f"vertical_in{i}")
+            stored_word = Signal(rows * bits, name=f"cost_lines{i}_read")
             stored = [stored_word[k * bits:(k + 1) * bits] for k in range(rows)]
-            newest = pipe(m, cost, 4, f"vertical_in{i}")
-            m.d.comb += [write.addr.eq(pipe(m, unit_address, 2, f"cost_lines{i}_write_address")),
-                         write.en.eq(unit_written),
-                         write.data.eq(Cat(newest, *stored[:rows - 1]))]
+            words = []
+            for b, depth in enumerate(banks):
+                m.submodules[f"cost_lines{i}_{b}"] = lines = Memory(
+                    shape=unsigned(rows * bits), depth=depth, init=[],
+                    attrs={"no_rw_check": 1})
+                read, write = lines.read_port(domain="sync"), lines.write_port()
+                mine = unit_written if len(banks) == 1 else \
+                    unit_written & (write_address[low:] == b)
+                m.d.comb += [read.addr.eq(unit_address[:low]), read.en.eq(unit_reading),
+                             write.addr.eq(write_address[:low]), write.en.eq(mine),
+                             write.data.eq(Cat(newest, *stored[:rows - 1]))]
+                words.append(pipe(m, read.data, 1, f"cost_lines{i}_{b}_out"))
+            if len(banks) == 1:
+                m.d.sync += stored_word.eq(words[0])
+            else:
+                chosen = pipe(m, unit_address[low:], 2, f"cost_lines{i}_bank")
+                m.d.sync += stored_word.eq(Array(words)[chosen])
             terms = [Mux(ok, row, 0) for ok, row in zip(unit_inside, [newest, *stored])]
             # The masks are a level of logic in front of the adders.
             total = build_sum(m, 1, terms, vertical_plan(p, self.every))

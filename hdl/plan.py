@@ -24,7 +24,8 @@ __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "outp
            "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
            "transformed_rows", "window_rows",
-           "vertical_bits", "VERTICAL_READ", "vertical_plan", "horizontal_plan",
+           "vertical_bits", "VERTICAL_READ", "COST_BANK", "cost_banks", "vertical_plan",
+           "horizontal_plan",
            "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
@@ -205,8 +206,23 @@ def vertical_bits(params):
 
 
 #: Clocks until the rows of a vertical sum from stored costs are there: the address
-#: register, the block RAM read, its output register, then the read register.
-VERTICAL_READ = 4
+#: register, the block RAM read, each bank's output register, the bank's choice, then the
+#: read register.
+VERTICAL_READ = 5
+
+#: Words of one bank of a cost line buffer (one ECP5 DP16KD at 36 bits, two Cyclone V
+#: M10K at 20): the W*R words of a unit are cut into banks of their own, each with its
+#: output register, and the bank is chosen behind those registers. One memory W*R deep was
+#: a cascade of block RAMs with the choice in front of the first register (ext. census 7x7
+#: on ECP5: nine DP16KD per unit, 70 MHz).
+COST_BANK = 512
+
+
+def cost_banks(params):
+    """Depths of the banks of one unit's cost line buffer (W*R words in all)."""
+    words = params.width * params.rounds
+    full, rest = divmod(words, COST_BANK)
+    return [COST_BANK] * full + ([rest] if rest else [])
 
 
 def vertical_plan(params, every=DEFAULT_EVERY):
@@ -437,8 +453,10 @@ def memories(params, every=DEFAULT_EVERY):
     if rows > 1 and p.stored_rows == "transforms":
         result.append(Memory("transform lines", 1, p.width, 2 * (rows - 1) * p.transform_bits))
     if a and p.stored_rows == "costs":
-        result.append(Memory("cost lines", units, p.width * rounds,
-                             (p.aggregation - 1) * p.cost_bits))
+        banks = cost_banks(p)
+        for depth in sorted(set(banks), reverse=True):
+            result.append(Memory("cost lines", units * banks.count(depth), depth,
+                                 (p.aggregation - 1) * p.cost_bits))
     if p.is_sgm:
         result += sgm_memories(p)
     if rounds > 1:

@@ -519,3 +519,28 @@ def test_broken_aggregation_column_mask_is_caught(monkeypatch):
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="transforms"), seed=1)
+
+
+@pytest.mark.parametrize("rounds", [2, 3])
+def test_aggregation_cost_banks_match_golden(monkeypatch, rounds):
+    """A cost line buffer of several banks (W*R = 18 or 27 words in banks of 8): every
+    bank's words, the shorter last bank's too, come back from the bank they were written
+    to."""
+    monkeypatch.setattr(plan, "COST_BANK", 8)
+    params = StereoParams(transform="census", block=3, disparities=6, rounds=rounds,
+                          width=9, height=6, line_buffer="costs")
+    assert len(plan.cost_banks(params)) == (3 if rounds == 2 else 4)
+    check_aggregation(params, seed=rounds)
+
+
+def test_broken_aggregation_bank_choice_is_caught(monkeypatch):
+    """The bank chosen a clock early: words come from the bank of the next address."""
+    monkeypatch.setattr(plan, "COST_BANK", 8)
+    real_pipe = hdl_aggregation.pipe
+
+    def early(m, value, steps, name, reset=False):
+        return real_pipe(m, value, 1 if name.endswith("_bank") else steps, name, reset)
+    monkeypatch.setattr(hdl_aggregation, "pipe", early)
+    with pytest.raises(AssertionError, match="sums differ"):
+        check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
+                                       width=9, height=6, line_buffer="costs"), seed=1)
