@@ -104,14 +104,15 @@ def test_timeout_kills_what_the_tool_started(tmp_path):
 
 def _router_script(iterations, failing, then_sleep):
     """A process writing router2's iteration lines (nextpnr 0.11's format) to
-    nextpnr.log, as a run with timing-driven rip-up does, then sleeping."""
-    line = ("Info:     iter={} wires=242623 overused=0 overuse=0 tmgfail=" + str(failing)
-            + " archfail=NA\n")
+    nextpnr.log, as a run with timing-driven rip-up does, then sleeping. ``failing`` is
+    the failing arcs of every iteration, or a function of the iteration that gives them."""
+    counts = [failing(i) if callable(failing) else failing for i in range(1, iterations + 1)]
+    line = "Info:     iter={} wires=242623 overused=0 overuse=0 tmgfail={} archfail=NA\n"
     return [sys.executable, "-c",
             "import time\n"
             "with open('nextpnr.log', 'w') as log:\n"
-            f"    for i in range(1, {iterations} + 1):\n"
-            f"        log.write({line!r}.format(i)); log.flush()\n"
+            f"    for i, arcs in enumerate({counts!r}, 1):\n"
+            f"        log.write({line!r}.format(i, arcs)); log.flush()\n"
             f"time.sleep({then_sleep})\n"]
 
 
@@ -129,9 +130,23 @@ def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
     assert not _processes_in(tmp_path)
 
 
-@pytest.mark.parametrize("iterations, failing", [(99, 6860), (1500, 14)])
-def test_ripup_close_to_the_clock_or_early_runs_on(tmp_path, monkeypatch, iterations, failing):
-    """Before 100 iterations, or a few arcs short of the clock: the run is left alone."""
+def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
+    """A few arcs short, but no fewer for 200 iterations: stopped."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    failure = synth._run(_router_script(400, lambda i: max(19, 60 - i), 60), tmp_path, None,
+                         "out.log",
+                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    assert failure == ("timing-driven rip-up abandoned: 19 arcs missed the clock after 400 "
+                       "iterations, none fewer than 19 since iteration 41")
+
+
+@pytest.mark.parametrize("iterations, failing", [
+    (99, 6860),                              # early
+    (240, lambda i: max(14, 60 - i)),        # no fewer for 194 iterations only
+    (1500, lambda i: 400 - i // 4)])         # close to the clock and still gaining
+def test_ripup_early_or_gaining_runs_on(tmp_path, monkeypatch, iterations, failing):
+    """Before 100 iterations, a few arcs short and still gaining, or not stalled for long:
+    the run is left alone."""
     monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
     failure = synth._run(_router_script(iterations, failing, 0.5), tmp_path, None, "out.log",
                          watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
