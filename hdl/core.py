@@ -179,7 +179,7 @@ class NpStereoCore(wiring.Component):
             word.user.eq(lr.frame_start), word.last.eq(lr.line_end),
         ]
         admit = Signal()        # the decision of this clock: the next slot has a position
-        credit_taken = Signal()  # the same, from the credits' copy of the decision
+        credit_taken = Signal()  # the same, a clock late with R >= 2 (see below)
         credits = Signal(range(self.queue_depth + 1), init=self.queue_depth)
         has_credit = Signal(init=1)
         # Credits come back when a word leaves the queue or a position retires without
@@ -319,19 +319,25 @@ class NpStereoCore(wiring.Component):
                 # other round, so the register itself is the decision of round R-1: no
                 # slot pulse and no multiplexer between it and what it drives (ext. rank
                 # 7x7 on ECP5: 7.6 ns from the slot pulse through the decision to the row
-                # flags). Each group of registers it steps has a copy of its own, loaded
-                # by an enable of its own (slots.private_first) so that synthesis keeps
-                # the copies apart: the framing logic sits by the input pins, the credits
-                # and the count of frames in flight by the output, and one decision
-                # register between them was 7.9 ns, two LUTs (census 9x9 on ECP5).
+                # flags). The framing logic by the input pins and the input stage's
+                # groups have a copy each, loaded by an enable of its own
+                # (slots.private_first) so that synthesis keeps the copies apart: one
+                # register for both was 7.9 ns to the frame counter (census 9x9 on ECP5).
                 latched = Signal(proposal, name=f"decision_{group}")
                 first = slots.private_first(rounds - 2, copy, f"decision_{group}_round")
                 m.d.sync += latched.eq(Mux(first, proposed, 0))
                 return latched
         chosen = decision("framing", 0)
-        counted = decision("credits", 1)
-        flight = decision("flight", 2)
-        handed = decision("input", 3)
+        handed = decision("input", 1)
+        # The credits and the count of frames in flight sit by the output: they take the
+        # decision a clock late, through a register of its own (a copy loaded from the
+        # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5). With R >= 2
+        # decisions are two clocks apart or more, so the next decision still sees every
+        # earlier one but the last, as _has_room assumes; a frame's count starts a clock
+        # late, long before its flush can end.
+        late = 1 if rounds > 1 else 0
+        taking = pipe(m, chosen.admit, late, "credit_taken", reset=True)
+        starting = pipe(m, chosen.admit & chosen.start, late, "frame_started", reset=True)
         take = chosen.take        # the admitted position is the head pixel (else zeros)
         error = Signal()
         m.d.sync += self.framing_error.eq(error)
@@ -361,8 +367,8 @@ class NpStereoCore(wiring.Component):
                     m.d.sync += [row.eq(Mux(end_of_frame, 0, row + 1)),
                                  last_row.eq(~end_of_frame & second_last_row)]
 
-        m.d.comb += credit_taken.eq(counted.admit)
-        m.d.sync += outstanding.eq(outstanding + (flight.admit & flight.start) - frame_done)
+        m.d.comb += credit_taken.eq(taking)
+        m.d.sync += outstanding.eq(outstanding + starting - frame_done)
 
         # The pixels leave the queue unchanged and are zeroed (dummy positions) two clocks
         # later, by a flag registered with them twice: the decision's register reached the

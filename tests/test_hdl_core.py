@@ -283,6 +283,29 @@ def test_broken_window_column_mask_is_caught(monkeypatch):
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 
 
+@pytest.mark.parametrize("rounds", [2, 3, 4])
+def test_credits_hold_under_slow_sink(rounds):
+    """With R >= 2 the credits are taken a clock after the decision: a sink far slower
+    than the core (a word per R clocks against 0.1 taken per clock) fills the output
+    queue, and no word may be lost."""
+    check_frames(StereoParams(transform="census", block=3, disparities=4 * rounds,
+                              rounds=rounds, lr_threshold=None, width=20, height=8),
+                 [TIES], frame_beats(*TIES), ready_prob=0.1)
+
+
+def test_late_credit_is_caught(monkeypatch):
+    """Credits taken five clocks after the decision instead of one: decisions the
+    admission cannot see yet overfill the output queue under a slow sink."""
+    real_pipe = core_module.pipe
+
+    def later(m, value, steps, name, reset=False):
+        return real_pipe(m, value, steps + 4 if name == "credit_taken" else steps, name,
+                         reset)
+    monkeypatch.setattr(core_module, "pipe", later)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=2,
+                               lr_threshold=None, width=20, height=8), ready_prob=0.1)
+
+
 def test_broken_credit_is_caught(monkeypatch):
     """Admission that ignores the output queue's room loses words under backpressure."""
     monkeypatch.setattr(core_module, "_has_room", lambda credits: 1)
