@@ -34,9 +34,17 @@ def _sources_digest(folders):
     return digest.hexdigest()[:16]
 
 
+#: The HDL sources as this process imported them (above, with core_verilog): hashed once,
+#: not at every call, so that a long sweep whose sources are edited on disk meanwhile
+#: does not file the Verilog of the code it runs under the digest of the edited files
+#: (a memo written so named a stale netlist as the new one's).
+_SOURCE_HASH = _sources_digest(_SOURCES)
+
+
 def source_hash():
-    """Digest of the HDL sources: the fast path to a configuration's Verilog digest."""
-    return _sources_digest(_SOURCES)
+    """Digest of the HDL sources this process runs: the fast path to a configuration's
+    Verilog digest."""
+    return _SOURCE_HASH
 
 
 def golden_source_hash():
