@@ -94,9 +94,9 @@ def add_hardware_arguments(parser):
     """Options of the generated hardware that change its resources, never its results."""
     parser.add_argument("--line-buffer", choices=LINE_BUFFERS, default="auto",
                         help="what the core keeps of the rows above for the vertical "
-                             "aggregation: their transformed pixels (the costs are computed "
-                             "again) or their costs; auto: costs for ext-census, else "
-                             "transforms (default auto)")
+                             "aggregation: their pixels or their transformed pixels (the "
+                             "costs are computed again), or their costs; auto: pixels for "
+                             "census, costs for ext-census, else transforms (default auto)")
 
 
 def _sgm_options(args):
