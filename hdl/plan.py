@@ -111,11 +111,17 @@ def cost_plan(params, every=DEFAULT_EVERY):
     """Register plan of the matching cost; ``sum()`` of it is the cost unit's latency.
 
     The census cost's XOR in front of the popcount is one LUT level, far shorter than an
-    adder level, and is not counted against the spacing; the ext. census sum of absolute
+    adder level, and is not counted against the spacing, and its adder levels are
+    registered one by one; the ext. census sum of absolute
     differences counts its subtraction itself; rank and ext. rank costs are one absolute
     difference.
     """
     tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
+    if tree == "popcount":
+        # A register after every adder level: two of the popcount's short adders in one
+        # clock were census 9x9's critical path once the control paths were cut (6.7 ns,
+        # five LUT levels, ECP5).
+        every = min(every, 1)
     if tree is None and every and params.transform_bits > PAIRED_ADDER_BITS:
         # Both differences registered, then the choice: a wide comparison, two
         # subtractions and the multiplexer in one clock were 7.7 ns (ext. rank 9x9, ECP5).
