@@ -150,14 +150,15 @@ class Aggregation(wiring.Component):
         written = slots.delay(reading, 2, 3, "cost_lines_written")
         control = _Chain(m, self.skews, "cost_lines")
         banks = cost_banks(p)
+        # The address bits within a bank (all of them with one bank).
+        low = (banks[0] - 1).bit_length() if len(banks) > 1 else len(address)
         sums = []
         for i, cost in enumerate(costs):
             unit_address, unit_reading, unit_written, *unit_inside = control.unit(
                 i, address, reading, written, *inside)
-            # Bank b holds words b*COST_BANK ..: every bank reads at the low bits, its
+            # Bank b holds words b*COST_BANK ..: every bank reads at the ``low`` bits, its
             # output register (the block RAM's own) holds the word, and the bank is
             # chosen behind those registers.
-            low = (banks[0] - 1).bit_length() if len(banks) > 1 else len(unit_address)
             write_address = pipe(m, unit_address, 3, f"cost_lines{i}_write_address")
             newest = pipe(m, cost, 5, f"vertical_in{i}")
             stored_word = Signal(rows * bits, name=f"cost_lines{i}_read")
