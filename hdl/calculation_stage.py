@@ -33,8 +33,9 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import (calculation_timing, centre_copies, cost_rows, row_sum_plan,
-                   store_slices, transformed_rows, unit_skews, vertical_bits)
+from .plan import (calculation_timing, centre_copies, cost_rows, masks_after_compare,
+                   row_sum_plan, store_slices, transformed_rows, unit_skews, vertical_bits,
+                   window_first_row, window_rows)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
@@ -62,7 +63,11 @@ class CalculationStage(wiring.Component):
     Attributes
     ----------
     window_left, window_right : In(ArrayLayout(unsigned(8), B * B))
-        From the input stage, slot-aligned at this stage's input.
+        From the input stage, slot-aligned at this stage's input (its layout:
+        :class:`~.input_stage.InputStage`).
+    keep : In(A * B * B)
+        With :func:`~.plan.masks_after_compare`: the windows' flags of pixels inside the
+        frame.
     centres_left, centres_right : In(ArrayLayout(unsigned(8), copies))
         Copies of the windows' centre (:func:`~.plan.centre_copies`), each its own register.
     tag : In(tag_layout)
@@ -81,13 +86,13 @@ class CalculationStage(wiring.Component):
 
     def __init__(self, params, every=DEFAULT_EVERY, slot_base=0):
         self.params, self.every, self.slot_base = params, every, slot_base
-        copies = centre_copies(params)
-        self.transform_left = Transform(params, every, copies)
-        self.transform_right = Transform(params, every, copies)
+        copies, after = centre_copies(params), masks_after_compare(params)
+        self.transform_left = Transform(params, every, copies, after)
+        self.transform_right = Transform(params, every, copies, after)
         #: With ``stored_rows == "pixels"``: the transforms of the windows 1 .. A-1 rows
         #: above, (left, right) per row.
-        self.transforms_above = [(Transform(params, every, copies),
-                                  Transform(params, every, copies))
+        self.transforms_above = [(Transform(params, every, copies, after),
+                                  Transform(params, every, copies, after))
                                  for _ in range(transformed_rows(params) - 1)]
         #: Rows whose costs the cost units compute: A with stored transforms, else 1.
         self.rows = cost_rows(params)
@@ -105,10 +110,13 @@ class CalculationStage(wiring.Component):
         self.sums_latency, self.min_latency = timing.sums, timing.min_tree
         self.latency = timing.latency
         units = params.per_round
-        window = data.ArrayLayout(unsigned(8),
-                                  transformed_rows(params) * params.block * params.block)
+        window = data.ArrayLayout(unsigned(8), (
+            window_rows(params) if after else transformed_rows(params) * params.block)
+            * params.block)
         centres = data.ArrayLayout(unsigned(8), copies * transformed_rows(params))
-        super().__init__({
+        keep = ({"keep": In(transformed_rows(params) * params.block * params.block)}
+                if after else {})
+        super().__init__({**keep,
             "window_left": In(window), "window_right": In(window),
             "centres_left": In(centres), "centres_right": In(centres),
             "tag": In(tag_layout(params)),
@@ -171,17 +179,20 @@ class CalculationStage(wiring.Component):
         takes its window and its window's centre copies."""
         p = self.params
         block, copies = p.block, tl.impl.copies
+        pixels = block * block
         units = [(tl, tr), *self.transforms_above]
         for k, (left, right) in enumerate(units):
             if k:
                 m.submodules[f"transform_left_above{k}"] = left
                 m.submodules[f"transform_right_above{k}"] = right
                 m.d.comb += [left.en.eq(1), right.en.eq(1)]
-            first = k * block * block
+            # Window k's pixels: its own masked window, or its rows of the shared one.
+            first = window_first_row(p, k) * block if tl.impl.mask_after else k * pixels
             for unit, window, centres in ((left, self.window_left, self.centres_left),
                                           (right, self.window_right, self.centres_right)):
-                m.d.comb += [unit.window[i].eq(window[first + i])
-                             for i in range(block * block)]
+                m.d.comb += [unit.window[i].eq(window[first + i]) for i in range(pixels)]
+                if tl.impl.mask_after:
+                    m.d.comb += unit.keep.eq(self.keep[k * pixels:(k + 1) * pixels])
                 if copies > 1:
                     m.d.comb += [unit.centres[j].eq(centres[k * copies + j])
                                  for j in range(copies)]

@@ -36,7 +36,7 @@ from .common import SlotClock, pipe
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
-from .plan import check_buildable, core_timing, latency, output_width
+from .plan import check_buildable, core_timing, latency, masks_after_compare, output_width
 from .trees import DEFAULT_EVERY
 
 __all__ = ["NpStereoCore"]
@@ -398,6 +398,8 @@ class NpStereoCore(wiring.Component):
             lr.first.eq(slots.first(self.sums_at)), lr.round.eq(slots.round(self.sums_at)),
             lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out),
         ]
+        if masks_after_compare(p):
+            m.d.comb += calc.keep.eq(inp.keep)
         return m
 
 

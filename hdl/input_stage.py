@@ -22,7 +22,8 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, bits_for, column_inside, pipe, tag_layout, y_range
-from .plan import INPUT_LATENCY, centre_copies, transformed_rows, window_rows
+from .plan import (INPUT_LATENCY, centre_copies, masks_after_compare, transformed_rows,
+                   window_first_row, window_rows)
 
 __all__ = ["InputStage"]
 
@@ -85,7 +86,15 @@ class InputStage(wiring.Component):
         Round 0 pulse and round of the slot timing at the admission offset.
     window_left, window_right : Out(ArrayLayout(unsigned(8), B * B))
         Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r), slot-aligned
-        at offset ``latency``; they change only when a position is admitted.
+        at offset ``latency``; they change only when a position is admitted. With A
+        windows per column, window k (k rows above the newest) follows window k - 1.
+        With :func:`~.plan.masks_after_compare`: one unmasked window of
+        :func:`~.plan.window_rows` rows instead, row-major, which the A windows share
+        (window k from row :func:`~.plan.window_first_row`).
+    keep : Out(A * B * B)
+        Only with :func:`~.plan.masks_after_compare`: per window, bit (dy + r) * B + dx + r
+        is 1 where the pixel lies inside the frame of the window's centre; slot-aligned
+        with the window.
     centres_left, centres_right : Out(ArrayLayout(unsigned(8), copies))
         Copies of the windows' centre pixel (:func:`~.plan.centre_copies`), each a
         register of its own, slot-aligned with the windows; not masked (a centre outside
@@ -103,11 +112,14 @@ class InputStage(wiring.Component):
 
     def __init__(self, params):
         self.params = params
-        window = data.ArrayLayout(unsigned(8),
-                                  transformed_rows(params) * params.block * params.block)
+        pixels = (window_rows(params) if masks_after_compare(params) else
+                  transformed_rows(params) * params.block) * params.block
+        window = data.ArrayLayout(unsigned(8), pixels)
         centres = data.ArrayLayout(unsigned(8),
                                    centre_copies(params) * transformed_rows(params))
-        super().__init__({
+        keep = ({"keep": Out(transformed_rows(params) * params.block * params.block)}
+                if masks_after_compare(params) else {})
+        super().__init__({**keep,
             "admit": In(1), "start": In(1), "overlap": In(1),
             "left": In(8), "right": In(8),
             "first": In(1), "round": In(bits_for(params.rounds - 1)),
@@ -160,7 +172,14 @@ class InputStage(wiring.Component):
 
         tag, keeps = self._centre(m, slots, admit, start)
         # First row (in the column) of window k, k rows above the newest.
-        firsts = [top - k - r for k in range(windows)]
+        firsts = [window_first_row(p, k) for k in range(windows)]
+        assert firsts[0] == top - r
+        if masks_after_compare(p):
+            # The flags travel with the window (its register, then the one by the
+            # comparisons), in the same order as the window's pixels.
+            m.d.comb += self.keep.eq(pipe(m, Cat(keeps[k][row][c] for k in range(windows)
+                                                 for row in range(block)
+                                                 for c in range(block)), 2, "keep_late"))
         for name, pixel in (("left", self.left), ("right", self.right)):
             # Slot s of the line buffer holds the pixel s + 1 rows above the newest one.
             # Every read address differs from the address written in the same clock (the
@@ -205,12 +224,19 @@ class InputStage(wiring.Component):
             # the masks reaching 16 pixels each). One assignment of the whole window:
             # per-element assignments would each cost a full-width assignment cell.
             # With the rows above transformed here, each of the A windows of the column is
-            # masked by flags of its own (``keeps[k]``, see _centre).
+            # masked by flags of its own (``keeps[k]``, see _centre); census and rank
+            # instead share the unmasked rows and mask their comparisons
+            # (plan.masks_after_compare).
             masked = Signal.like(window, name=f"{name}_window", reset_less=True)
-            m.d.sync += masked.eq(Cat(
-                Mux(keeps[k][row][c], columns[c][8 * (first + row):8 * (first + row + 1)], 0)
-                for k, first in enumerate(firsts)
-                for row in range(block) for c in range(block)))
+            if masks_after_compare(p):
+                m.d.sync += masked.eq(Cat(columns[c][8 * row:8 * (row + 1)]
+                                          for row in range(rows) for c in range(block)))
+            else:
+                m.d.sync += masked.eq(Cat(
+                    Mux(keeps[k][row][c], columns[c][8 * (first + row):8 * (first + row + 1)],
+                        0)
+                    for k, first in enumerate(firsts)
+                    for row in range(block) for c in range(block)))
             # And once more, with the centres' copies: each copy is then a register next to
             # the comparisons it feeds, a clock away from the columns it is taken from (a
             # copy feeding the comparisons straight from the columns was 5 ns of routing,
@@ -470,7 +496,7 @@ class InputStage(wiring.Component):
         # Per window of the column (one but with ``pixels``), row by row of the window.
         keeps = []
         for k in range(windows):
-            first = top - k - r
+            first = window_first_row(p, k)
             keep = [[Signal(name=f"keep_r{row}_c{c}" if k == 0 else f"keep{k}_r{row}_c{c}")
                      for c in range(block)] for row in range(block)]
             with m.If(admitted):

@@ -23,7 +23,7 @@ from .trees import (DEFAULT_EVERY, PAIRED_ADDER_BITS, min_tree_latency, popcount
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
-           "transformed_rows", "window_rows",
+           "transformed_rows", "window_rows", "window_first_row", "masks_after_compare",
            "vertical_bits", "VERTICAL_READ", "COST_BANK", "cost_banks", "vertical_plan",
            "horizontal_plan",
            "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
@@ -204,6 +204,25 @@ def window_rows(params):
     """Rows of the input stage's window: B, or B + A - 1 when the rows above are
     transformed again from pixels (the A windows of a column, one below the other)."""
     return params.block + transformed_rows(params) - 1
+
+
+def window_first_row(params, k):
+    """First row, in the input stage's window of :func:`window_rows` rows (top row 0),
+    of the window k rows above the newest."""
+    return transformed_rows(params) - 1 - k
+
+
+def masks_after_compare(params):
+    """Whether the A windows of a column share one unmasked window of pixels, and the
+    transforms mask their comparisons instead (``Transform(mask_after=True)``).
+
+    Census and rank with ``stored_rows == "pixels"``: a neighbour outside the frame is 0,
+    and its bit (0 < centre) is centre != 0, one LUT behind the comparison. Masking the
+    pixels instead keeps A masked copies of overlapping rows, twice (the window register
+    and the one by the comparisons): census 11x11 held 11,616 flip-flops there, against
+    4,576 for one shared window and its flags.
+    """
+    return params.transform in ("census", "rank") and transformed_rows(params) > 1
 
 
 def vertical_bits(params):

@@ -7,11 +7,16 @@ parameters. The window arrives already masked (pixels outside the frame are 0), 
 pixel (dy, dx) is element (dy + r) * B + (dx + r); neighbours are numbered in the same
 raster order without the centre, as in the golden model.
 
+Census and rank can instead take the window unmasked with a ``keep`` flag per pixel
+(``mask_after``): a neighbour outside the frame is 0, and 0 < centre is centre != 0, so
+the comparison's bit is chosen after it (the A windows of a column then share one
+window of pixels, see :func:`~.plan.masks_after_compare`).
+
 Each component computes one window per ``en``-high clock; pipeline registers (see
 :mod:`.trees`) advance only while ``en`` is high, and ``latency`` counts them.
 """
 
-from amaranth.hdl import Cat, Module, unsigned
+from amaranth.hdl import Cat, Module, Mux, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -32,6 +37,11 @@ def xi(centre, neighbour):
     return neighbour < centre
 
 
+def _check_mask_after(params, mask_after):
+    if mask_after and params.transform not in ("census", "rank"):
+        raise ValueError(f"mask_after is for census and rank, not {params.transform}")
+
+
 class _WindowTransform(wiring.Component):
     """Common signature and window unpacking of the four transforms.
 
@@ -46,25 +56,32 @@ class _WindowTransform(wiring.Component):
         Copies of the centre pixel the caller gives in ``centres`` (registers of their
         own, see :func:`~.plan.centre_copies`); neighbour n is compared with copy
         n * copies // k. With 1 the centre is taken from the window.
+    mask_after : bool
+        Census and rank only: the window arrives unmasked, with ``keep``.
 
     Attributes
     ----------
     window : In(ArrayLayout(unsigned(8), B * B))
     centres : In(ArrayLayout(unsigned(8), copies))
         Only with ``copies`` > 1.
+    keep : In(B * B)
+        Only with ``mask_after``: bit i is 1 where window pixel i lies inside the frame.
     en : In(1)
     value : Out(unsigned(params.transform_bits))
     latency : int
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY, copies=1):
-        self.params, self.copies = params, copies
+    def __init__(self, params, every=DEFAULT_EVERY, copies=1, mask_after=False):
+        _check_mask_after(params, mask_after)
+        self.params, self.copies, self.mask_after = params, copies, mask_after
         #: Register plan (:func:`~.plan.transform_plan`): where the registers go.
         self.plan = transform_plan(params, every)
         self.latency = sum(self.plan)
         members = {"window": In(data.ArrayLayout(unsigned(8), params.block * params.block))}
         if copies > 1:
             members["centres"] = In(data.ArrayLayout(unsigned(8), copies))
+        if mask_after:
+            members["keep"] = In(params.block * params.block)
         super().__init__({**members, "en": In(1),
                           "value": Out(unsigned(params.transform_bits))})
 
@@ -78,6 +95,17 @@ class _WindowTransform(wiring.Component):
             return [self.window[centre_index]] * k, neighbours
         return [self.centres[n * self.copies // k] for n in range(k)], neighbours
 
+    def _compared(self, centres, neighbours):
+        """Eq. 1 of every neighbour, with ``mask_after`` the bit of a neighbour outside
+        the frame (a 0 pixel) chosen after the comparison."""
+        bits = [xi(c, p) for c, p in zip(centres, neighbours)]
+        if not self.mask_after:
+            return bits
+        block, r = self.params.block, self.params.radius
+        centre_index = r * block + r
+        keeps = [self.keep[i] for i in range(block * block) if i != centre_index]
+        return [Mux(keep, bit, c != 0) for keep, bit, c in zip(keeps, bits, centres)]
+
     def elaborate(self, platform):
         m = Module()
         centres, neighbours = self._centres_and_neighbours()
@@ -89,7 +117,7 @@ class Rank(_WindowTransform):
     """Eq. 2: number of neighbours darker than the centre (compares, then a popcount)."""
 
     def _value(self, m, centres, neighbours):
-        compared = Cat(xi(c, p) for c, p in zip(centres, neighbours))
+        compared = Cat(self._compared(centres, neighbours))
         if self.plan[0]:
             compared = delay(m, self.en, compared, 1, "rank_compared")
         return build_popcount(m, self.en, [compared[n] for n in range(len(neighbours))],
@@ -100,7 +128,7 @@ class Census(_WindowTransform):
     """Eq. 4: bit n is the comparison with neighbour n (then the output register)."""
 
     def _value(self, m, centres, neighbours):
-        return delay(m, self.en, Cat(xi(c, p) for c, p in zip(centres, neighbours)),
+        return delay(m, self.en, Cat(self._compared(centres, neighbours)),
                      self.latency, "census")
 
 
@@ -127,8 +155,8 @@ _TRANSFORMS = {"rank": Rank, "census": Census, "ext-rank": ExtRank, "ext-census"
 class Transform(wiring.Component):
     """The transform ``params.transform`` of one window per ``en``-high clock.
 
-    Same members as the per-transform components (``window``, ``en``, ``value``,
-    ``latency``), which it instantiates as its only submodule.
+    Same members as the per-transform components (``window``, ``centres``, ``keep``,
+    ``en``, ``value``, ``latency``), which it instantiates as its only submodule.
 
     Parameters
     ----------
@@ -137,9 +165,10 @@ class Transform(wiring.Component):
         Register spacing in levels of logic; 0 for a combinational transform.
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY, copies=1):
+    def __init__(self, params, every=DEFAULT_EVERY, copies=1, mask_after=False):
+        _check_mask_after(params, mask_after)
         self.params = params
-        self.impl = _TRANSFORMS[params.transform](params, every, copies)
+        self.impl = _TRANSFORMS[params.transform](params, every, copies, mask_after)
         self.latency = self.impl.latency
         super().__init__(self.impl.signature)
 
@@ -153,4 +182,6 @@ class Transform(wiring.Component):
         ]
         if self.impl.copies > 1:
             m.d.comb += self.impl.centres.eq(self.centres)
+        if self.impl.mask_after:
+            m.d.comb += self.impl.keep.eq(self.keep)
         return m

@@ -182,6 +182,39 @@ def test_transform_matches_golden(transform, block, every):
                     seed=block * 10 + every)
 
 
+@pytest.mark.parametrize("transform", ["census", "rank"])
+@pytest.mark.parametrize("block,every", [(3, 2), (5, 0), (7, 2)])
+def test_transform_masking_after_compare_matches_golden(transform, block, every):
+    # The window arrives unmasked with a flag per pixel; the golden transform sees the
+    # pixels outside the frame as 0 (the centre is never masked).
+    params = StereoParams(transform=transform, block=block)
+    rng = np.random.default_rng(block * 7 + every)
+    size, centre = block * block, block * block // 2
+    windows = random_windows(block, 100, rng)
+    keeps = [rng.random(size) < rng.choice([0.0, 0.5, 0.9, 1.0]) for _ in windows]
+    inputs = list(zip(windows, keeps))
+    masked = [np.where(keep | (np.arange(size) == centre), window, 0).astype(np.uint8)
+              for window, keep in inputs]
+    dut = Transform(params, every, mask_after=True)
+
+    def apply(ctx, item):
+        window, keep = item
+        ctx.set(dut.window.as_value(), pack_window(window))
+        ctx.set(dut.keep, sum(int(bit) << i for i, bit in enumerate(keep)))
+
+    assert_stream_matches(
+        dut, inputs, apply, lambda ctx: ctx.get(dut.value),
+        [golden_window_value(w, params) for w in masked], 5, 0.6,
+        garbage=lambda r: (np.array([r.randrange(256) for _ in range(size)]),
+                           np.array([r.random() < 0.5 for _ in range(size)])))
+
+
+@pytest.mark.parametrize("transform", ["ext-rank", "ext-census"])
+def test_transform_masking_after_compare_is_for_bitwise_transforms(transform):
+    with pytest.raises(ValueError, match=f"mask_after is for census and rank, not {transform}"):
+        Transform(StereoParams(transform=transform, block=3), mask_after=True)
+
+
 def test_transform_latency_grows_logarithmically():
     units = [Transform(StereoParams(transform="rank", block=b)) for b in (3, 7, 19)]
     for unit in units:
