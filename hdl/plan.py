@@ -90,7 +90,7 @@ def _unit_plan(tree, params, every, depth):
     return register_plan(params.neighbours if tree == "sum" else 1, every, depth, registered)
 
 
-def transform_plan(params, every=DEFAULT_EVERY):
+def transform_plan(params, every=DEFAULT_EVERY, mask_after=False):
     """Register plan of ``params.transform``; ``sum()`` of it is the transform's latency.
 
     The comparisons or differences with the centre come first, and they are registered
@@ -99,8 +99,12 @@ def transform_plan(params, every=DEFAULT_EVERY):
     full adders behind it). For rank the plan's first entry is that register, then the
     popcount's plan; ext. rank's subtractions and inversions are the leaves of its tree
     (one level, then a register); census and ext. census are one level and the output
-    register.
+    register. Census with ``mask_after`` (:func:`masks_after_compare`) registers the
+    comparisons, then chooses the bits of the neighbours outside the frame, then the
+    output register.
     """
+    if params.transform == "census" and mask_after and every > 0:
+        return [True, True]
     if params.transform == "rank":
         return [every > 0] + popcount_plan(params.neighbours, every, 0, every > 0)
     tree = {"ext-rank": "sad"}.get(params.transform)
@@ -342,7 +346,7 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     once; then unit i's result waits S - s_i clocks for the last unit's: before SGM, or
     after the box sum (:class:`~.aggregation.Aggregation`).
     """
-    transform_latency = sum(transform_plan(params, every))
+    transform_latency = sum(transform_plan(params, every, masks_after_compare(params)))
     rows = cost_rows(params)
     # At least a clock, so that unit 0's store write can be prepared a clock ahead.
     transformed = max(transform_latency, 3 if rows > 1 and params.stored_rows == "transforms"

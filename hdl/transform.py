@@ -75,7 +75,7 @@ class _WindowTransform(wiring.Component):
         _check_mask_after(params, mask_after)
         self.params, self.copies, self.mask_after = params, copies, mask_after
         #: Register plan (:func:`~.plan.transform_plan`): where the registers go.
-        self.plan = transform_plan(params, every)
+        self.plan = transform_plan(params, every, mask_after)
         self.latency = sum(self.plan)
         members = {"window": In(data.ArrayLayout(unsigned(8), params.block * params.block))}
         if copies > 1:
@@ -95,16 +95,25 @@ class _WindowTransform(wiring.Component):
             return [self.window[centre_index]] * k, neighbours
         return [self.centres[n * self.copies // k] for n in range(k)], neighbours
 
-    def _compared(self, centres, neighbours):
+    def _compared(self, m, centres, neighbours, registered=False):
         """Eq. 1 of every neighbour, with ``mask_after`` the bit of a neighbour outside
-        the frame (a 0 pixel) chosen after the comparison."""
-        bits = [xi(c, p) for c, p in zip(centres, neighbours)]
+        the frame (a 0 pixel) chosen after the comparison; ``registered``: after the
+        comparisons' register, which then also holds the flags and each centre copy's
+        centre != 0."""
+        bits = Cat(xi(c, p) for c, p in zip(centres, neighbours))
         if not self.mask_after:
-            return bits
-        block, r = self.params.block, self.params.radius
+            return [bits[n] for n in range(len(bits))]
+        block, r, k = self.params.block, self.params.radius, self.params.neighbours
         centre_index = r * block + r
-        keeps = [self.keep[i] for i in range(block * block) if i != centre_index]
-        return [Mux(keep, bit, c != 0) for keep, bit, c in zip(keeps, bits, centres)]
+        keeps = Cat(self.keep[i] for i in range(block * block) if i != centre_index)
+        copies = ([self.window[centre_index]] if self.copies == 1 else
+                  [self.centres[j] for j in range(self.copies)])
+        nonzero = Cat(c != 0 for c in copies)
+        if registered:
+            bits = delay(m, self.en, bits, 1, "census_compared")
+            keeps = delay(m, self.en, keeps, 1, "census_keep")
+            nonzero = delay(m, self.en, nonzero, 1, "census_nonzero")
+        return [Mux(keeps[n], bits[n], nonzero[n * len(copies) // k]) for n in range(k)]
 
     def elaborate(self, platform):
         m = Module()
@@ -117,7 +126,7 @@ class Rank(_WindowTransform):
     """Eq. 2: number of neighbours darker than the centre (compares, then a popcount)."""
 
     def _value(self, m, centres, neighbours):
-        compared = Cat(self._compared(centres, neighbours))
+        compared = Cat(self._compared(m, centres, neighbours))
         if self.plan[0]:
             compared = delay(m, self.en, compared, 1, "rank_compared")
         return build_popcount(m, self.en, [compared[n] for n in range(len(neighbours))],
@@ -128,8 +137,12 @@ class Census(_WindowTransform):
     """Eq. 4: bit n is the comparison with neighbour n (then the output register)."""
 
     def _value(self, m, centres, neighbours):
-        return delay(m, self.en, Cat(self._compared(centres, neighbours)),
-                     self.latency, "census")
+        # With mask_after, the comparisons are registered before the mask's choice (plan
+        # [True, True]): a LUT behind the comparison's carry chain in the same clock was
+        # census 7x7's critical path (6.67 ns, ECP5).
+        registered = self.mask_after and len(self.plan) == 2
+        return delay(m, self.en, Cat(self._compared(m, centres, neighbours, registered)),
+                     self.latency - registered, "census")
 
 
 class ExtRank(_WindowTransform):
