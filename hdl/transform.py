@@ -100,9 +100,10 @@ class _WindowTransform(wiring.Component):
         the frame (a 0 pixel) chosen after the comparison; ``registered``: after the
         comparisons' register, which then also holds the flags and each centre copy's
         centre != 0."""
-        bits = Cat(xi(c, p) for c, p in zip(centres, neighbours))
+        bits = [xi(c, p) for c, p in zip(centres, neighbours)]
         if not self.mask_after:
-            return [bits[n] for n in range(len(bits))]
+            return bits
+        bits = Cat(bits)
         block, r, k = self.params.block, self.params.radius, self.params.neighbours
         centre_index = r * block + r
         keeps = Cat(self.keep[i] for i in range(block * block) if i != centre_index)

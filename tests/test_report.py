@@ -156,6 +156,22 @@ def test_cache_key_depends_on_configuration_and_verilog():
     assert key != report_cache.cache_key(params, "cyclonev", False, 150.0, "v2")
 
 
+@pytest.mark.parametrize("transform,chosen,other", [("census", "pixels", "costs"),
+                                                    ("rank", "transforms", "pixels"),
+                                                    ("ext-census", "costs", "transforms")])
+def test_cache_key_of_auto_is_the_line_buffer_it_chooses(transform, chosen, other):
+    # A single report with the default line buffer finds what the paper sweep (explicit
+    # line buffers) measured, and the other way round: one netlist, one result.
+    params = StereoParams(transform=transform, block=3, disparities=8, rounds=2, width=32,
+                          height=8)
+    for target, pnr in (("cyclonev", False), ("ecp5", True)):
+        key = report_cache.cache_key(params, target, pnr, 150.0, "v1")
+        assert key == report_cache.cache_key(params.replace(line_buffer=chosen), target, pnr,
+                                             150.0, "v1")
+        assert key != report_cache.cache_key(params.replace(line_buffer=other), target, pnr,
+                                             150.0, "v1")
+
+
 def test_verilog_digest_ignores_the_header_only(tmp_path):
     params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
     text = core_verilog(params)
