@@ -221,10 +221,11 @@ def masks_after_compare(params):
     transforms mask their comparisons instead (``Transform(mask_after=True)``).
 
     Census and rank with ``stored_rows == "pixels"``: a neighbour outside the frame is 0,
-    and its bit (0 < centre) is centre != 0, one LUT behind the comparison. Masking the
+    and its bit (0 < centre) is centre != 0, one LUT after the comparison (census: after
+    the comparison's register, see :func:`transform_plan`). Masking the
     pixels instead keeps A masked copies of overlapping rows, twice (the window register
     and the one by the comparisons): census 11x11 held 11,616 flip-flops there, against
-    4,576 for one shared window and its flags.
+    4,576 for one shared window and 726 for its flags (ECP5 placement: docs/hardware.md).
     """
     return params.transform in ("census", "rank") and transformed_rows(params) > 1
 
