@@ -35,7 +35,7 @@ from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .plan import (calculation_timing, centre_copies, cost_rows, masks_after_compare,
                    row_sum_plan, store_slices, transformed_rows, unit_skews, vertical_bits,
-                   window_first_row, window_rows)
+                   window_first_row, window_pixels)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
@@ -110,9 +110,7 @@ class CalculationStage(wiring.Component):
         self.sums_latency, self.min_latency = timing.sums, timing.min_tree
         self.latency = timing.latency
         units = params.per_round
-        window = data.ArrayLayout(unsigned(8), (
-            window_rows(params) if after else transformed_rows(params) * params.block)
-            * params.block)
+        window = data.ArrayLayout(unsigned(8), window_pixels(params))
         centres = data.ArrayLayout(unsigned(8), copies * transformed_rows(params))
         keep = ({"keep": In(transformed_rows(params) * params.block * params.block)}
                 if after else {})

@@ -23,7 +23,7 @@ from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, bits_for, column_inside, pipe, tag_layout, y_range
 from .plan import (INPUT_LATENCY, centre_copies, masks_after_compare, transformed_rows,
-                   window_first_row, window_rows)
+                   window_first_row, window_pixels, window_rows)
 
 __all__ = ["InputStage"]
 
@@ -112,9 +112,7 @@ class InputStage(wiring.Component):
 
     def __init__(self, params):
         self.params = params
-        pixels = (window_rows(params) if masks_after_compare(params) else
-                  transformed_rows(params) * params.block) * params.block
-        window = data.ArrayLayout(unsigned(8), pixels)
+        window = data.ArrayLayout(unsigned(8), window_pixels(params))
         centres = data.ArrayLayout(unsigned(8),
                                    centre_copies(params) * transformed_rows(params))
         keep = ({"keep": Out(transformed_rows(params) * params.block * params.block)}

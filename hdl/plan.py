@@ -23,7 +23,8 @@ from .trees import (DEFAULT_EVERY, PAIRED_ADDER_BITS, min_tree_latency, popcount
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
-           "transformed_rows", "window_rows", "window_first_row", "masks_after_compare",
+           "transformed_rows", "window_rows", "window_first_row", "window_pixels",
+           "masks_after_compare",
            "vertical_bits", "VERTICAL_READ", "COST_BANK", "cost_banks", "vertical_plan",
            "horizontal_plan",
            "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
@@ -214,6 +215,14 @@ def window_first_row(params, k):
     """First row, in the input stage's window of :func:`window_rows` rows (top row 0),
     of the window k rows above the newest."""
     return transformed_rows(params) - 1 - k
+
+
+def window_pixels(params):
+    """Pixels of the window the input stage hands the calculation stage: the A windows'
+    own masked pixels, or with :func:`masks_after_compare` the rows they share."""
+    if masks_after_compare(params):
+        return window_rows(params) * params.block
+    return transformed_rows(params) * params.block * params.block
 
 
 def masks_after_compare(params):
