@@ -21,7 +21,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .common import absolute_difference, delay
-from .plan import transform_plan
+from .plan import census_registers_compared, transform_plan
 from .trees import DEFAULT_EVERY, build_popcount, build_sad
 
 __all__ = ["xi", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
@@ -73,7 +73,8 @@ class _WindowTransform(wiring.Component):
 
     def __init__(self, params, every=DEFAULT_EVERY, copies=1, mask_after=False):
         _check_mask_after(params, mask_after)
-        self.params, self.copies, self.mask_after = params, copies, mask_after
+        self.params, self.every = params, every
+        self.copies, self.mask_after = copies, mask_after
         #: Register plan (:func:`~.plan.transform_plan`): where the registers go.
         self.plan = transform_plan(params, every, mask_after)
         self.latency = sum(self.plan)
@@ -85,14 +86,22 @@ class _WindowTransform(wiring.Component):
         super().__init__({**members, "en": In(1),
                           "value": Out(unsigned(params.transform_bits))})
 
+    @property
+    def _centre_index(self):
+        """Index of the centre pixel in ``window`` (and in ``keep``)."""
+        return self.params.radius * self.params.block + self.params.radius
+
+    def _neighbour_indices(self):
+        """Window indices of the k neighbours, in order."""
+        return [i for i in range(self.params.block ** 2) if i != self._centre_index]
+
     def _centres_and_neighbours(self):
         """Per neighbour (in order) the centre copy it is compared with, and the
         neighbours."""
-        block, r, k = self.params.block, self.params.radius, self.params.neighbours
-        centre_index = r * block + r
-        neighbours = [self.window[i] for i in range(block * block) if i != centre_index]
+        k = self.params.neighbours
+        neighbours = [self.window[i] for i in self._neighbour_indices()]
         if self.copies == 1:
-            return [self.window[centre_index]] * k, neighbours
+            return [self.window[self._centre_index]] * k, neighbours
         return [self.centres[n * self.copies // k] for n in range(k)], neighbours
 
     def _compared(self, m, centres, neighbours, registered=False):
@@ -103,11 +112,9 @@ class _WindowTransform(wiring.Component):
         bits = [xi(c, p) for c, p in zip(centres, neighbours)]
         if not self.mask_after:
             return bits
-        bits = Cat(bits)
-        block, r, k = self.params.block, self.params.radius, self.params.neighbours
-        centre_index = r * block + r
-        keeps = Cat(self.keep[i] for i in range(block * block) if i != centre_index)
-        copies = ([self.window[centre_index]] if self.copies == 1 else
+        bits, k = Cat(bits), self.params.neighbours
+        keeps = Cat(self.keep[i] for i in self._neighbour_indices())
+        copies = ([self.window[self._centre_index]] if self.copies == 1 else
                   [self.centres[j] for j in range(self.copies)])
         nonzero = Cat(c != 0 for c in copies)
         if registered:
@@ -138,10 +145,7 @@ class Census(_WindowTransform):
     """Eq. 4: bit n is the comparison with neighbour n (then the output register)."""
 
     def _value(self, m, centres, neighbours):
-        # With mask_after, the comparisons are registered before the mask's choice (plan
-        # [True, True]): a LUT behind the comparison's carry chain in the same clock was
-        # census 7x7's critical path (6.67 ns, ECP5).
-        registered = self.mask_after and len(self.plan) == 2
+        registered = census_registers_compared(self.params, self.every, self.mask_after)
         return delay(m, self.en, Cat(self._compared(m, centres, neighbours, registered)),
                      self.latency - registered, "census")
 
