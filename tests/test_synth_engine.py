@@ -130,6 +130,16 @@ def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
     assert not _processes_in(tmp_path)
 
 
+def test_congested_ripup_is_stopped_sooner(tmp_path, monkeypatch):
+    """Over 5,000 arcs failing after 30 iterations: stopped without waiting for 100."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    failure = synth._run(_router_script(34, 25024, 60), tmp_path, None, "out.log",
+                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    assert failure == ("timing-driven rip-up abandoned: 25,024 arcs missed the clock after "
+                       "34 iterations")
+    assert not isinstance(failure, synth._Stalled)
+
+
 def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
     """A few arcs short, but no fewer for 200 iterations: stopped."""
     monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
@@ -138,10 +148,12 @@ def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
                          watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure == ("timing-driven rip-up abandoned: 19 arcs missed the clock after 400 "
                        "iterations, none fewer than 19 since iteration 41")
+    assert isinstance(failure, synth._Stalled)
 
 
 @pytest.mark.parametrize("iterations, failing", [
-    (99, 6860),                              # early
+    (99, 4000),                              # early
+    (29, 6860),                              # early, far from the clock
     (240, lambda i: max(14, 60 - i)),        # no fewer for 194 iterations only
     (1500, lambda i: 400 - i // 4)])         # close to the clock and still gaining
 def test_ripup_early_or_gaining_runs_on(tmp_path, monkeypatch, iterations, failing):
