@@ -261,6 +261,8 @@ _RIPUP_EARLY_FAILING_ARCS = 5000
 _RIPUP_PATIENCE = 200
 _HOPELESS = "timing-driven rip-up abandoned"
 _ITERATION = re.compile(rb"iter=(\d+) .*overused=(\d+) .*tmgfail=(\d+)")
+
+
 def _hopeless_ripup(log_path):
     """For :func:`_run`'s ``watch``: a reason to stop nextpnr's timing-driven rip-up, or
     None (see :data:`_RIPUP_ITERATIONS`, :data:`_RIPUP_PATIENCE`)."""
