@@ -265,7 +265,8 @@ _ITERATION = re.compile(rb"iter=(\d+) .*overused=(\d+) .*tmgfail=(\d+)")
 
 def _hopeless_ripup(log_path):
     """For :func:`_run`'s ``watch``: a reason to stop nextpnr's timing-driven rip-up, or
-    None (see :data:`_RIPUP_ITERATIONS`, :data:`_RIPUP_PATIENCE`)."""
+    None (see :data:`_RIPUP_ITERATIONS`, :data:`_RIPUP_EARLY_ITERATIONS`,
+    :data:`_RIPUP_PATIENCE`)."""
     try:
         with open(log_path, "rb") as log:
             matches = _ITERATION.findall(log.read())
