@@ -25,11 +25,32 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
-from .plan import (aggregation_latency, cost_banks, horizontal_plan, unit_skews,
+from .plan import (BANK_CHOICE, aggregation_latency, bank_choice_levels, cost_banks,
+                   horizontal_plan, unit_skews,
                    vertical_bits, vertical_clocks, vertical_plan)
 from .trees import DEFAULT_EVERY, build_sum
 
 __all__ = ["Aggregation"]
+
+
+def _choose_bank(m, words, bank, name):
+    """The word of bank ``bank`` among the banks' output registers ``words``, two clocks
+    after ``bank``: chosen among up to :data:`~.plan.BANK_CHOICE` banks at a time, each
+    level but the last registered (its digit of the index a clock later each time)."""
+    digit = BANK_CHOICE.bit_length() - 1
+    level = 0
+    while len(words) > BANK_CHOICE:
+        chosen = pipe(m, bank[digit * level:digit * (level + 1)], 2 + level,
+                      f"{name}{level}" if level else name)
+        groups = [words[g:g + BANK_CHOICE] for g in range(0, len(words), BANK_CHOICE)]
+        words = []
+        for g, group in enumerate(groups):
+            word = Signal.like(group[0], name=f"{name}{level}_{g}")
+            m.d.sync += word.eq(Array(group)[chosen] if len(group) > 1 else group[0])
+            words.append(word)
+        level += 1
+    chosen = pipe(m, bank[digit * level:], 2 + level, f"{name}{level}" if level else name)
+    return Array(words)[chosen]
 
 
 def _row_inside(y, above, height):
@@ -144,10 +165,12 @@ class Aggregation(wiring.Component):
         # stage).
         inside = [Signal(name=f"row_ok{k}") for k in range(rows + 1)]
         m.d.sync += [ok.eq(_row_inside(tag.y, k, p.height)) for k, ok in enumerate(inside)]
-        inside = [slots.delay(ok, 1, 4, f"row_ok{k}", reset_less=True)
+        # Each level of the bank's choice beyond the first is a clock more to the word.
+        later = bank_choice_levels(p) - 1
+        inside = [slots.delay(ok, 1, 4 + later, f"row_ok{k}", reset_less=True)
                   for k, ok in enumerate(inside)]
         reading = slots.delay(tag.valid, 0, 2, "cost_lines_reading")
-        written = slots.delay(reading, 2, 3, "cost_lines_written")
+        written = slots.delay(reading, 2, 3 + later, "cost_lines_written")
         control = _Chain(m, self.skews, "cost_lines")
         banks = cost_banks(p)
         # The address bits within a bank (all of them with one bank).
@@ -159,8 +182,8 @@ class Aggregation(wiring.Component):
             # Bank b holds words b*COST_BANK ..: every bank reads at the ``low`` bits, its
             # output register (the block RAM's own) holds the word, and the bank is
             # chosen behind those registers.
-            write_address = pipe(m, unit_address, 3, f"cost_lines{i}_write_address")
-            newest = pipe(m, cost, 5, f"vertical_in{i}")
+            write_address = pipe(m, unit_address, 3 + later, f"cost_lines{i}_write_address")
+            newest = pipe(m, cost, 5 + later, f"vertical_in{i}")
             stored_word = Signal(rows * bits, name=f"cost_lines{i}_read")
             stored = [stored_word[k * bits:(k + 1) * bits] for k in range(rows)]
             words = []
@@ -178,8 +201,8 @@ class Aggregation(wiring.Component):
             if len(banks) == 1:
                 m.d.sync += stored_word.eq(words[0])
             else:
-                chosen = pipe(m, unit_address[low:], 2, f"cost_lines{i}_bank")
-                m.d.sync += stored_word.eq(Array(words)[chosen])
+                m.d.sync += stored_word.eq(_choose_bank(m, words, unit_address[low:],
+                                                        f"cost_lines{i}_bank"))
             terms = [Mux(ok, row, 0) for ok, row in zip(unit_inside, [newest, *stored])]
             # The masks are a level of logic in front of the adders.
             total = build_sum(m, 1, terms, vertical_plan(p, self.every))

@@ -25,7 +25,8 @@ __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "outp
            "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
            "transformed_rows", "window_rows", "window_first_row", "window_pixels",
            "masks_after_compare", "census_registers_compared",
-           "vertical_bits", "VERTICAL_READ", "COST_BANK", "cost_banks", "vertical_plan",
+           "vertical_bits", "VERTICAL_READ", "BANK_CHOICE", "COST_BANK", "cost_banks",
+           "bank_choice_levels", "vertical_read", "vertical_plan",
            "horizontal_plan",
            "row_sum_plan", "vertical_clocks", "aggregation_latency", "MAX_SKEW_ONE_ROUND", "unit_skews",
            "CalculationTiming", "calculation_timing",
@@ -251,10 +252,16 @@ def vertical_bits(params):
     return (params.max_cost * params.aggregation).bit_length()
 
 
-#: Clocks until the rows of a vertical sum from stored costs are there: the address
-#: register, the block RAM read, each bank's output register, the bank's choice, then the
-#: read register.
+#: Clocks until the rows of a vertical sum from stored costs are there with the bank
+#: chosen in one level (:func:`bank_choice_levels`): the address register, the block RAM
+#: read, each bank's output register, the bank's choice, then the read register. Each
+#: further level of the choice adds a clock (:func:`vertical_read`).
 VERTICAL_READ = 5
+
+#: Banks chosen among in one clock: a 4:1 multiplexer is a LUT4 pair and a PFUMX on ECP5.
+#: A unit's ten banks chosen in one clock were ext. census 7x7's critical path (11.3 ns,
+#: four LUT levels, 88.2 MHz); more banks are chosen in a registered tree of such choices.
+BANK_CHOICE = 4
 
 #: Words of one bank of a cost line buffer (one ECP5 DP16KD at 36 bits, two Cyclone V
 #: M10K at 20): the W*R words of a unit are cut into banks of their own, each with its
@@ -269,6 +276,21 @@ def cost_banks(params):
     words = params.width * params.rounds
     full, rest = divmod(words, COST_BANK)
     return [COST_BANK] * full + ([rest] if rest else [])
+
+
+def bank_choice_levels(params):
+    """Registered levels of the choice of a unit's cost line buffer bank: level l chooses
+    by digit l of the bank's index in base :data:`BANK_CHOICE` (one level for up to
+    ``BANK_CHOICE`` banks, or a single bank)."""
+    levels, banks = 1, len(cost_banks(params))
+    while banks > BANK_CHOICE:
+        levels, banks = levels + 1, -(-banks // BANK_CHOICE)
+    return levels
+
+
+def vertical_read(params):
+    """Clocks until the rows of a vertical sum from stored costs are there."""
+    return VERTICAL_READ + bank_choice_levels(params) - 1
 
 
 def vertical_plan(params, every=DEFAULT_EVERY):
@@ -293,7 +315,7 @@ def vertical_clocks(params, every=DEFAULT_EVERY):
     """Clocks of the vertical sum from stored costs (``stored_rows == "costs"``), else 0."""
     if not params.agg_radius or params.stored_rows != "costs":
         return 0
-    return VERTICAL_READ + sum(vertical_plan(params, every))
+    return vertical_read(params) + sum(vertical_plan(params, every))
 
 
 def aggregation_latency(params, every=DEFAULT_EVERY):

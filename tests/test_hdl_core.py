@@ -13,7 +13,7 @@ import pytest
 from amaranth.hdl import Value
 from amaranth.lib import memory
 
-from npstereo.hdl import evaluation_stage, input_stage, lr_check, trees
+from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan, trees
 from npstereo.hdl import core as core_module
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
@@ -72,6 +72,19 @@ def test_two_frames_back_to_back(line_buffer):
     result = check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                           valid_prob=GAPS, ready_prob=GAPS, seed=3)
     assert result["errors"] == 0
+
+
+def test_cost_bank_choice_in_levels(monkeypatch):
+    """A cost line buffer of 20 banks (banks of 2 words, W*R = 40): the bank is chosen in
+    three registered levels, and the core's timing takes the two clocks more, across two
+    frames back to back with stalls."""
+    monkeypatch.setattr(plan, "COST_BANK", 2)
+    params = StereoParams(transform="ext-census", block=3, disparities=8, rounds=2,
+                          lr_threshold=1, width=20, height=7, line_buffer="costs")
+    assert plan.bank_choice_levels(params) == 3
+    pairs = [stereo_pair("layers", 7, 20, 9), stereo_pair("independent", 7, 20, 10)]
+    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
+                 valid_prob=GAPS, ready_prob=GAPS, seed=4)
 
 
 @pytest.mark.parametrize("line_buffer", ["transforms", "pixels"])

@@ -566,6 +566,32 @@ def test_aggregation_cost_banks_match_golden(monkeypatch, rounds):
     check_aggregation(params, seed=rounds)
 
 
+@pytest.mark.parametrize("bank, levels", [(2, 2), (1, 3)])
+def test_aggregation_bank_choice_in_levels_matches_golden(monkeypatch, bank, levels):
+    """More banks than one clock's choice (W*R = 18 words in banks of 2 or 1: 9 or 18
+    banks): the choice in registered levels, the word a clock later per level."""
+    monkeypatch.setattr(plan, "COST_BANK", bank)
+    params = StereoParams(transform="census", block=3, disparities=6, rounds=2, width=9,
+                          height=6, line_buffer="costs")
+    assert plan.bank_choice_levels(params) == levels
+    assert plan.vertical_read(params) == plan.VERTICAL_READ + levels - 1
+    check_aggregation(params, seed=levels)
+
+
+def test_broken_aggregation_bank_choice_level_is_caught(monkeypatch):
+    """The second level's digit a clock early: words from the group of the next address."""
+    monkeypatch.setattr(plan, "COST_BANK", 2)
+    real_pipe = hdl_aggregation.pipe
+
+    def early(m, value, steps, name, reset=False):
+        return real_pipe(m, value, steps - 1 if name.endswith("_bank1") else steps, name,
+                         reset)
+    monkeypatch.setattr(hdl_aggregation, "pipe", early)
+    with pytest.raises(AssertionError, match="sums differ"):
+        check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
+                                       width=9, height=6, line_buffer="costs"), seed=1)
+
+
 def test_broken_aggregation_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words come from the bank of the next address."""
     monkeypatch.setattr(plan, "COST_BANK", 8)
