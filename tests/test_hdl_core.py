@@ -87,6 +87,18 @@ def test_cost_bank_choice_in_levels(monkeypatch):
                  valid_prob=GAPS, ready_prob=GAPS, seed=4)
 
 
+@pytest.mark.parametrize("rounds", [1, 2])
+def test_shift_enables_from_copies_of_the_decision(monkeypatch, rounds):
+    """Every window's early shift copies fed by copies of the core's decision, not by the
+    admission's register (what large blocks do): same frames, back to back, with stalls."""
+    monkeypatch.setattr(input_stage, "EARLY_FANOUT", 1)
+    params = StereoParams(transform="census", block=5, disparities=8, rounds=rounds,
+                          lr_threshold=1, width=20, height=7)
+    pairs = [stereo_pair("layers", 7, 20, 11), stereo_pair("independent", 7, 20, 12)]
+    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
+                 valid_prob=GAPS, ready_prob=GAPS, seed=rounds)
+
+
 @pytest.mark.parametrize("line_buffer", ["transforms", "pixels"])
 def test_second_frame_at_full_rate_sees_only_its_own_rows(line_buffer):
     """A random pair right after a layered one, at full rate: the second frame's first rows
