@@ -38,10 +38,14 @@ def _choose_bank(m, words, bank, name):
     after ``bank``: chosen among up to :data:`~.plan.BANK_CHOICE` banks at a time, each
     level but the last registered (its digit of the index a clock later each time)."""
     digit = BANK_CHOICE.bit_length() - 1
+
+    def digits(low, high, level):
+        """The index's digits ``low:high``, delayed to the choice of ``level``."""
+        return pipe(m, bank[low:high], 2 + level, f"{name}{level}" if level else name)
+
     level = 0
     while len(words) > BANK_CHOICE:
-        chosen = pipe(m, bank[digit * level:digit * (level + 1)], 2 + level,
-                      f"{name}{level}" if level else name)
+        chosen = digits(digit * level, digit * (level + 1), level)
         groups = [words[g:g + BANK_CHOICE] for g in range(0, len(words), BANK_CHOICE)]
         words = []
         for g, group in enumerate(groups):
@@ -49,7 +53,7 @@ def _choose_bank(m, words, bank, name):
             m.d.sync += word.eq(Array(group)[chosen] if len(group) > 1 else group[0])
             words.append(word)
         level += 1
-    chosen = pipe(m, bank[digit * level:], 2 + level, f"{name}{level}" if level else name)
+    chosen = digits(digit * level, len(bank), level)
     return Array(words)[chosen]
 
 

@@ -41,6 +41,18 @@ SHIFT_ROWS, SHIFT_FANOUT = 3, 4
 EARLY_FANOUT = 16
 
 
+def _shift_groups(params):
+    """Early shift copies a window's shift needs (see :data:`SHIFT_FANOUT`)."""
+    groups = params.block * -(-window_rows(params) // SHIFT_ROWS)
+    return -(-groups // SHIFT_FANOUT)
+
+
+def _large_window(params):
+    """A window too large for one register of the admission to reach: more early shift
+    copies than :data:`EARLY_FANOUT` (from 13x13 on)."""
+    return _shift_groups(params) > EARLY_FANOUT
+
+
 def _row_inside(y, offset, height):
     """Row ``y + offset`` lies inside the frame."""
     return (y >= -offset) & (y < height - offset)
@@ -212,8 +224,8 @@ class InputStage(wiring.Component):
             # 9x9 on ECP5), one per column still 7 ns (rank 9x9).
             groups = [(c, low, min(rows, low + SHIFT_ROWS)) for c in range(block)
                       for low in range(0, rows, SHIFT_ROWS)]
-            count = -(-len(groups) // SHIFT_FANOUT)
-            sources = [admit] if count <= EARLY_FANOUT else [
+            count = _shift_groups(p)
+            sources = [admit] if not _large_window(p) else [
                 slots.private_copy(self.admit, -1, j, f"{name}_shift_admit{j}")
                 for j in range(-(-count // EARLY_FANOUT))]
             early = [slots.private_copy(sources[g // EARLY_FANOUT], 0, g,
@@ -501,12 +513,16 @@ class InputStage(wiring.Component):
         # stepped flags: one flag per window row would fan out to a whole row of both
         # windows (5.6 ns of routing on ECP5).
         # Per window of the column (one but with ``pixels``), row by row of the window.
+        # The flags they are formed from change only in the clock after a step, so a
+        # flag loaded every clock equals one loaded with the tag: a large window's flags
+        # run free, for the tag's enable reaching all of them was ext. rank 17x17's
+        # critical path (admitted_tag_p0 to keep_r9_c0, 10.3 ns of wire, 289 flags).
         keeps = []
         for k in range(windows):
             first = window_first_row(p, k)
             keep = [[Signal(name=f"keep_r{row}_c{c}" if k == 0 else f"keep{k}_r{row}_c{c}")
                      for c in range(block)] for row in range(block)]
-            with m.If(admitted):
+            with m.If(1 if _large_window(p) else admitted):
                 for row in range(block):
                     inside = row_ok[first + row] if k == 0 else \
                         Mux(old[k], prev_ok[first + row], row_ok[first + row])

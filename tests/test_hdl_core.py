@@ -8,6 +8,8 @@ input and the throughput; ``test_broken_*`` monkeypatch a deliberately wrong rul
 stage and prove that the golden comparison catches it.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from amaranth.hdl import Value
@@ -87,16 +89,29 @@ def test_cost_bank_choice_in_levels(monkeypatch):
                  valid_prob=GAPS, ready_prob=GAPS, seed=4)
 
 
-@pytest.mark.parametrize("rounds", [1, 2])
-def test_shift_enables_from_copies_of_the_decision(monkeypatch, rounds):
-    """Every window's early shift copies fed by copies of the core's decision, not by the
-    admission's register (what large blocks do): same frames, back to back, with stalls."""
+@pytest.mark.parametrize("transform,rounds", [("census", 1), ("census", 2), ("ext-rank", 2)])
+def test_large_window_control(monkeypatch, transform, rounds):
+    """What large windows do, at block 5: every window's early shift copies fed by copies
+    of the core's decision, not by the admission's register, and window masks that run
+    free instead of loading with the tag (census masks its comparisons, ext. rank its
+    window): same frames, back to back, with stalls."""
     monkeypatch.setattr(input_stage, "EARLY_FANOUT", 1)
-    params = StereoParams(transform="census", block=5, disparities=8, rounds=rounds,
+    params = StereoParams(transform=transform, block=5, disparities=8, rounds=rounds,
                           lr_threshold=1, width=20, height=7)
+    assert input_stage._large_window(params)
     pairs = [stereo_pair("layers", 7, 20, 11), stereo_pair("independent", 7, 20, 12)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                  valid_prob=GAPS, ready_prob=GAPS, seed=rounds)
+
+
+def test_small_windows_keep_the_admission_register():
+    """Up to 11x11 a window's shift and masks take the admission's register itself (their
+    netlists, and the results measured on them, stay as they were)."""
+    for transform in ("rank", "census", "ext-rank", "ext-census"):
+        params = StereoParams(transform=transform, block=11, disparities=100, rounds=10,
+                              width=450, height=375)
+        assert not input_stage._large_window(params)
+        assert input_stage._large_window(dataclasses.replace(params, block=13))
 
 
 @pytest.mark.parametrize("line_buffer", ["transforms", "pixels"])
