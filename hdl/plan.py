@@ -120,6 +120,14 @@ def census_registers_compared(params, every, mask_after):
     return params.transform == "census" and mask_after and every > 0
 
 
+#: Neighbours above which the census cost's popcount registers every second adder level,
+#: not every level. Census is flip-flop-bound on the ECP5 from 17x17 on: at 17x17 the
+#: thirty popcounts' registers were 22,680 of 70,503 flip-flops (84 % of the 85k, its LUTs
+#: at 79 %), and those cores' clocks are limited by the input stage's wires (8.5 ns and
+#: more), not by the 6.7 ns two adder levels take.
+SPACED_POPCOUNT_ABOVE = 256
+
+
 def cost_plan(params, every=DEFAULT_EVERY):
     """Register plan of the matching cost; ``sum()`` of it is the cost unit's latency.
 
@@ -130,7 +138,7 @@ def cost_plan(params, every=DEFAULT_EVERY):
     difference.
     """
     tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
-    if tree == "popcount":
+    if tree == "popcount" and params.neighbours <= SPACED_POPCOUNT_ABOVE:
         # A register after every adder level: two of the popcount's short adders in one
         # clock were census 9x9's critical path once the control paths were cut (6.7 ns,
         # five LUT levels, ECP5).

@@ -104,6 +104,28 @@ def test_large_window_control(monkeypatch, transform, rounds):
                  valid_prob=GAPS, ready_prob=GAPS, seed=rounds)
 
 
+def test_spaced_popcount(monkeypatch):
+    """The census cost's popcount with a register every second adder level (what census
+    does from 17x17 on), at block 5: same frames, back to back, with stalls."""
+    monkeypatch.setattr(plan, "SPACED_POPCOUNT_ABOVE", 8)
+    params = StereoParams(transform="census", block=5, disparities=8, rounds=2,
+                          lr_threshold=1, width=20, height=7)
+    assert not all(plan.cost_plan(params))
+    pairs = [stereo_pair("layers", 7, 20, 13), stereo_pair("independent", 7, 20, 14)]
+    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
+                 valid_prob=GAPS, ready_prob=GAPS, seed=5)
+
+
+def test_popcount_spacing_by_block():
+    """Census up to 15x15 registers every adder level of its popcount; 17x17 and 19x19
+    every second one."""
+    def spaced(block):
+        params = StereoParams(transform="census", block=block, disparities=100, rounds=10,
+                              width=450, height=375)
+        return not all(plan.cost_plan(params))
+    assert [spaced(block) for block in (7, 9, 11, 13, 15, 17, 19)] == [False] * 5 + [True] * 2
+
+
 def test_small_windows_keep_the_admission_register():
     """Up to 11x11 a window's shift and masks take the admission's register itself (their
     netlists, and the results measured on them, stay as they were)."""
