@@ -213,6 +213,19 @@ def test_reset_mid_frame_then_clean_frame():
     check_frames(params, [second], beats, valid_prob=GAPS, ready_prob=GAPS, seed=5)
 
 
+@pytest.mark.parametrize("transform", ["rank", "census"])
+def test_reset_mid_frame_with_large_window_control(monkeypatch, transform):
+    """The same with the large windows' control (free-running masks): after the reset the
+    masks hold whatever the flags' reset values make of them until the first position."""
+    monkeypatch.setattr(input_stage, "EARLY_FANOUT", 1)
+    params = StereoParams(transform=transform, block=5, disparities=8, rounds=2,
+                          lr_threshold=1, width=18, height=6)
+    assert input_stage._large_window(params)
+    first, second = stereo_pair("independent", 6, 18, 15), stereo_pair("layers", 6, 18, 16)
+    beats = frame_beats(*first)[:70] + [RESET] + frame_beats(*second)
+    check_frames(params, [second], beats, valid_prob=GAPS, ready_prob=GAPS, seed=6)
+
+
 @pytest.mark.parametrize("fault", ["long line", "short line", "no start of frame",
                                    "early start of frame"])
 def test_misframed_input_then_clean_frame(fault):
