@@ -128,6 +128,16 @@ def census_registers_compared(params, every, mask_after):
 SPACED_POPCOUNT_ABOVE = 256
 
 
+#: Neighbours above which ext. census's sum of absolute differences takes its first
+#: register one adder level later (spacing 3; the latency is the same). Yosys then maps
+#: the differences' inversions and two adder levels into Cyclone V's ALM compressors (a
+#: 360-pair sum alone: 10,290 ALUTs against 11,295), which ECP5's LUT4s cannot hold (48
+#: pairs: 1,704 LUT4 against 1,560, 4.6 LUT levels against 3.6). From 13x13 on ext. census
+#: is too large for the ECP5-85k, the largest ECP5 (72,290 ALUTs at 13x13, and ext. census
+#: 7x7 took 1.06 LUT4 per ALUT), and at 19x19 it was 4.1 % over the paper's EP2S180.
+SPACED_SAD_ABOVE = 120
+
+
 def cost_plan(params, every=DEFAULT_EVERY):
     """Register plan of the matching cost; ``sum()`` of it is the cost unit's latency.
 
@@ -138,6 +148,8 @@ def cost_plan(params, every=DEFAULT_EVERY):
     difference.
     """
     tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
+    if tree == "sad" and every and params.neighbours > SPACED_SAD_ABOVE:
+        every = max(every, 3)
     if tree == "popcount" and params.neighbours <= SPACED_POPCOUNT_ABOVE:
         # A register after every adder level: two of the popcount's short adders in one
         # clock were census 9x9's critical path once the control paths were cut (6.7 ns,

@@ -126,6 +126,29 @@ def test_popcount_spacing_by_block():
     assert [spaced(block) for block in (7, 9, 11, 13, 15, 17, 19)] == [False] * 5 + [True] * 2
 
 
+def test_spaced_sum_of_differences(monkeypatch):
+    """Ext. census's sum of absolute differences with its first register one adder level
+    later (what ext. census does from 13x13 on), at block 3: same frames with stalls."""
+    monkeypatch.setattr(plan, "SPACED_SAD_ABOVE", 4)
+    params = StereoParams(transform="ext-census", block=3, disparities=8, rounds=2,
+                          lr_threshold=1, width=20, height=7)
+    assert plan.cost_plan(params)[:3] == [False, False, True]
+    pairs = [stereo_pair("layers", 7, 20, 17), stereo_pair("independent", 7, 20, 18)]
+    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
+                 valid_prob=GAPS, ready_prob=GAPS, seed=7)
+
+
+def test_sum_of_differences_spacing_by_block():
+    """Ext. census up to 11x11 registers its sum of differences after the first adder
+    level; from 13x13 on after the second, at the same latency."""
+    for block in (7, 9, 11, 13, 15, 17, 19):
+        params = StereoParams(transform="ext-census", block=block, disparities=100,
+                              rounds=10, width=450, height=375)
+        cost = plan.cost_plan(params)
+        assert cost[:3] == ([False, True, False] if block <= 11 else [False, False, True])
+        assert sum(cost) == sum(trees.sad_plan(params.neighbours, 2, 0, True))
+
+
 def test_small_windows_keep_the_admission_register():
     """Up to 11x11 a window's shift and masks take the admission's register itself (their
     netlists, and the results measured on them, stay as they were)."""
