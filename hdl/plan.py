@@ -133,8 +133,8 @@ SPACED_POPCOUNT_ABOVE = 256
 #: the differences' inversions and two adder levels into Cyclone V's ALM compressors (a
 #: 360-pair sum alone: 10,290 ALUTs against 11,295), which ECP5's LUT4s cannot hold (48
 #: pairs: 1,704 LUT4 against 1,560, 4.6 LUT levels against 3.6). From 13x13 on ext. census
-#: is too large for the ECP5-85k, the largest ECP5 (72,290 ALUTs at 13x13, and ext. census
-#: 7x7 took 1.06 LUT4 per ALUT), and at 19x19 it was 4.1 % over the paper's EP2S180.
+#: is too large for the ECP5-85k, the largest ECP5 (122 % of its LUTs at 13x13, 159 % at
+#: 15x15), and at 19x19 it was 4.1 % over the paper's EP2S180 (138,648 ALUTs now, within).
 SPACED_SAD_ABOVE = 120
 
 
