@@ -42,15 +42,22 @@ EARLY_FANOUT = 16
 
 
 def _shift_groups(params):
+    """The groups of a window's registers that shift by one copy of the admission:
+    (column, first row, end row), :data:`SHIFT_ROWS` rows of a column each."""
+    rows = window_rows(params)
+    return [(c, low, min(rows, low + SHIFT_ROWS)) for c in range(params.block)
+            for low in range(0, rows, SHIFT_ROWS)]
+
+
+def _early_copies(params):
     """Early shift copies a window's shift needs (see :data:`SHIFT_FANOUT`)."""
-    groups = params.block * -(-window_rows(params) // SHIFT_ROWS)
-    return -(-groups // SHIFT_FANOUT)
+    return -(-len(_shift_groups(params)) // SHIFT_FANOUT)
 
 
 def _large_window(params):
     """A window too large for one register of the admission to reach: more early shift
     copies than :data:`EARLY_FANOUT` (from 13x13 on)."""
-    return _shift_groups(params) > EARLY_FANOUT
+    return _early_copies(params) > EARLY_FANOUT
 
 
 def _row_inside(y, offset, height):
@@ -222,9 +229,8 @@ class InputStage(wiring.Component):
             # copy of ``admitted`` from a tree of copies (SHIFT_FANOUT groups to a copy a
             # clock earlier): one register reaching them all was 10 ns of routing (census
             # 9x9 on ECP5), one per column still 7 ns (rank 9x9).
-            groups = [(c, low, min(rows, low + SHIFT_ROWS)) for c in range(block)
-                      for low in range(0, rows, SHIFT_ROWS)]
-            count = _shift_groups(p)
+            groups = _shift_groups(p)
+            count = _early_copies(p)
             sources = [admit] if not _large_window(p) else [
                 slots.private_copy(self.admit, -1, j, f"{name}_shift_admit{j}")
                 for j in range(-(-count // EARLY_FANOUT))]
