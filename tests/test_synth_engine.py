@@ -102,18 +102,26 @@ def test_timeout_kills_what_the_tool_started(tmp_path):
     assert not _processes_in(tmp_path)
 
 
+def _log_script(log_name, lines, every, then_sleep):
+    """A process writing ``lines`` to ``log_name`` as a nextpnr run logs them, ``every``
+    seconds apart, then sleeping without a word."""
+    return [sys.executable, "-c",
+            "import time\n"
+            f"with open({log_name!r}, 'w') as log:\n"
+            f"    for line in {lines!r}:\n"
+            "        log.write(line + '\\n'); log.flush()\n"
+            f"        time.sleep({every})\n"
+            f"time.sleep({then_sleep})\n"]
+
+
 def _router_script(iterations, failing, then_sleep):
     """A process writing router2's iteration lines (nextpnr 0.11's format) to
     nextpnr.log, as a run with timing-driven rip-up does, then sleeping. ``failing`` is
     the failing arcs of every iteration, or a function of the iteration that gives them."""
-    counts = [failing(i) if callable(failing) else failing for i in range(1, iterations + 1)]
-    line = "Info:     iter={} wires=242623 overused=0 overuse=0 tmgfail={} archfail=NA\n"
-    return [sys.executable, "-c",
-            "import time\n"
-            "with open('nextpnr.log', 'w') as log:\n"
-            f"    for i, arcs in enumerate({counts!r}, 1):\n"
-            f"        log.write({line!r}.format(i, arcs)); log.flush()\n"
-            f"time.sleep({then_sleep})\n"]
+    line = "Info:     iter={} wires=242623 overused=0 overuse=0 tmgfail={} archfail=NA"
+    lines = [line.format(i, failing(i) if callable(failing) else failing)
+             for i in range(1, iterations + 1)]
+    return _log_script("nextpnr.log", lines, 0, then_sleep)
 
 
 def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
@@ -163,18 +171,6 @@ def test_ripup_early_or_gaining_runs_on(tmp_path, monkeypatch, iterations, faili
     assert failure is None
 
 
-def _placer_script(lines, every, then_sleep):
-    """A process writing nextpnr 0.11's placement lines to place.log, ``every`` seconds
-    apart, then sleeping without a word."""
-    return [sys.executable, "-c",
-            "import time\n"
-            "with open('place.log', 'w') as log:\n"
-            f"    for line in {lines!r}:\n"
-            "        log.write(line + '\\n'); log.flush()\n"
-            f"        time.sleep({every})\n"
-            f"time.sleep({then_sleep})\n"]
-
-
 _PACKED_AND_PLACING = [
     "Info: \t        TRELLIS_COMB:   78160/  83640    93%",
     "Info:     at iteration #17, type ALL: wirelen solved = 644465, spread = 714846, "
@@ -188,8 +184,9 @@ def test_stalled_placement_is_stopped(tmp_path, monkeypatch):
     with where it stalled and how full the packed design is."""
     monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
     started = time.monotonic()
-    failure = synth._run(_placer_script(_PACKED_AND_PLACING, 0.05, 60), tmp_path, None,
-                         "out.log", watch=synth._SilenceWatch(tmp_path / "place.log", 1.0))
+    failure = synth._run(_log_script("place.log", _PACKED_AND_PLACING, 0.05, 60), tmp_path,
+                         None, "out.log",
+                         watch=synth._SilenceWatch(tmp_path / "place.log", 1.0))
     assert failure == ("placement stalled: nextpnr logged nothing for 0.0166667 min after "
                        "analytic placement iteration 18 (78,160 of 83,640 TRELLIS_COMB cells "
                        "after packing, 93 %)")
@@ -204,7 +201,7 @@ def test_placement_that_logs_runs_on(tmp_path, monkeypatch):
     monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.05)
     lines = [f"Info:   at iteration #{i}: temp = 0.000000, timing cost = 584, wirelen = 1"
              for i in range(30)]
-    failure = synth._run(_placer_script(lines, 0.1, 0), tmp_path, None, "out.log",
+    failure = synth._run(_log_script("place.log", lines, 0.1, 0), tmp_path, None, "out.log",
                          watch=synth._SilenceWatch(tmp_path / "place.log", 0.5))
     assert failure is None
 
