@@ -138,6 +138,16 @@ def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
     assert not _processes_in(tmp_path)
 
 
+def test_ripup_far_from_the_clock_is_stopped_at_100(tmp_path, monkeypatch):
+    """Fewer than 5,000 arcs failing (the early rule's bound) but more than 500 after 100
+    iterations: stopped by the 100-iteration rule alone."""
+    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    failure = synth._run(_router_script(120, 4000, 60), tmp_path, None, "out.log",
+                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    assert failure == ("timing-driven rip-up abandoned: 4,000 arcs missed the clock after "
+                       "120 iterations")
+
+
 def test_congested_ripup_is_stopped_sooner(tmp_path, monkeypatch):
     """Over 5,000 arcs failing after 30 iterations: stopped without waiting for 100."""
     monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
