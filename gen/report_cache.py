@@ -151,7 +151,9 @@ def seed_cache(sweep_json, cache):
         if report.get("verilog_sha", digest if same_sources else None) != digest:
             continue
         for target, result in report["results"].items():
-            if result.get("status") not in ("ok", "failed"):
+            # "does not fit" is an answer like "ok": without it a fresh machine would
+            # synthesise the largest cores again for an hour to learn what it says.
+            if result.get("status") not in ("ok", "failed", "does not fit"):
                 continue
             if target == "ecp5" and "freq" not in result:
                 continue  # an older result that did not record its nextpnr settings

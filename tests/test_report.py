@@ -307,6 +307,13 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     sweep = tmp_path / "sweep.json"
     sweep.write_text(json.dumps(document))
     assert report_cache.seed_cache(sweep, tmp_path / "cache") == 1   # the timeout is not taken
+    too_big = {"target": "ecp5", "status": "does not fit", "message": "does not fit (112 % LUT)",
+               "pnr": True, "freq": 150.0}
+    document["reports"][0]["results"]["ecp5"] = too_big             # a verdict is an answer
+    sweep.write_text(json.dumps(document))
+    assert report_cache.seed_cache(sweep, tmp_path / "cache") == 1
+    verdict = cmd_report.lookup(params, ["ecp5"], pnr=True, cache=tmp_path / "cache")
+    assert verdict["results"]["ecp5"]["message"] == "does not fit (112 % LUT)"
     stored = cmd_report.evaluate(params, ["cyclonev"], cache=tmp_path / "cache")
     assert stored["results"]["cyclonev"]["cached"] is True
     assert stored["results"]["cyclonev"]["logic"] == 123
@@ -320,7 +327,7 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     assert report_cache.seed_cache(sweep, tmp_path / "other") == 0
     document["hdl_sources"] = report_cache.source_hash()
     sweep.write_text(json.dumps(document))
-    assert report_cache.seed_cache(sweep, tmp_path / "other") == 1
+    assert report_cache.seed_cache(sweep, tmp_path / "other") == 2
 
 
 def test_sweep_document_shows_what_the_cache_holds_of_unfinished_cells(tmp_path):
