@@ -20,13 +20,14 @@ from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable, c
 from ..hdl.verilog import TOP_NAME, core_verilog
 from ..params import StereoParams, UserError
 from .atomic import write_text
+from .capacity import fit_message
 from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
 from .engine import Task, TaskFailure, add_engine_arguments, check_engine_arguments, \
     cluster, run_tasks, task_key
 from .paper_resources import is_default_line_buffer, paper_configurations
 from .plots import sweep_plots
-from .report_cache import cache_key, design, memoised_digest, read_result, seed_cache, \
-    source_hash, store_result
+from .report_cache import cache_key, design, incomplete, memoised_digest, read_result, \
+    seed_cache, source_hash, store_result
 from .report_tables import format_table, sweep_markdown
 from .synth import ENGINES, TARGETS, synthesise, tool_versions
 
@@ -64,6 +65,9 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, e
         path = None if cache is None else _path(cache, params, target, pnr, freq, digest,
                                                 device)
         cached = None if path is None else read_result(path)
+        if cached is not None and incomplete(cached):
+            verilog = core_verilog(params) if verilog is None else verilog
+            cached = _completed(cached, verilog, path, timeout, engine, device)
         if cached is not None:
             results[target] = cached
             continue
@@ -86,6 +90,23 @@ def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, e
     return _report(params, digest, results)
 
 
+def _completed(cached, verilog, path, timeout, engine, device):
+    """A cached ECP5 result that predates the count of carry chains, with the count and
+    the utilisation and verdict that follow from it: synthesised again, not placed (place
+    and route figures are the netlist's, which has not changed). Stored in place of the
+    old one; left as it was if the synthesis does not finish."""
+    fresh = synthesise(verilog, "ecp5", TOP_NAME, timeout=timeout, engine=engine,
+                       device=device)
+    if "carry_chains" not in fresh:
+        return cached
+    result = dict(cached, carry_chains=fresh["carry_chains"],
+                  utilisation=fresh["utilisation"], fits=fresh["fits"])
+    if result["status"] == "does not fit":
+        result["message"] = fit_message(result["utilisation"]) or result["message"]
+    store_result(path, result)
+    return dict(result, cached=False)
+
+
 def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=_DEFAULT_DEVICE,
            partial=False):
     """The report :func:`evaluate` would give, from ``cache`` alone (nothing generated or
@@ -99,7 +120,7 @@ def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=_DEFAULT_D
     if partial:
         results = {t: r for t, r in results.items() if r is not None}
         return _report(params, digest, results) if results else None
-    if any(r is None for r in results.values()):
+    if any(r is None or incomplete(r) for r in results.values()):
         return None
     return _report(params, digest, results)
 

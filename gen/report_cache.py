@@ -19,7 +19,7 @@ from .synth import tool_versions
 
 __all__ = ["source_hash", "golden_source_hash", "verilog_digest", "configuration_digest",
            "design", "memoised_digest", "cache_key", "seed_cache", "read_result",
-           "store_result"]
+           "store_result", "incomplete"]
 
 _PACKAGE = Path(__file__).resolve().parent.parent
 #: What the generated Verilog is made from: the HDL and the parameter object.
@@ -120,12 +120,21 @@ def read_result(path):
 
 
 def store_result(path, result):
-    """Cache ``result`` at ``path`` atomically, without its ``cached`` mark; a result
-    already there is kept (results under one key are equal)."""
+    """Cache ``result`` at ``path`` atomically, without its ``cached`` mark; a complete
+    result already there is kept (results under one key are equal)."""
     path = Path(path)
-    if not path.exists():
+    existing = read_result(path)
+    if existing is None or incomplete(existing):
         write_text(path, json.dumps({k: v for k, v in result.items() if k != "cached"},
                                     indent=1))
+
+
+def incomplete(result):
+    """Whether a cached ECP5 result predates the count of carry chains: its LUT
+    utilisation leaves out the four LUT sites nextpnr packs into every chain
+    (:mod:`.capacity`), so its synthesis is run again, without place and route."""
+    return result.get("target") == "ecp5" and "logic" in result and \
+        "carry_chains" not in result
 
 
 def seed_cache(sweep_json, cache):

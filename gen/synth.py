@@ -46,7 +46,7 @@ from .logic_depth import logic_depth_file
 from .outreg import pack_outreg_file
 
 __all__ = ["TARGETS", "ENGINES", "ToolError", "tool_versions", "synthesise", "run_yosys",
-           "memory_cells_bits", "default_engine", "engine_version"]
+           "carry_chains", "memory_cells_bits", "default_engine", "engine_version"]
 
 #: Target names as the command line spells them.
 TARGETS = ("cyclonev", "ecp5")
@@ -201,6 +201,17 @@ def _resources(target, cells):
             "registers": total("TRELLIS_FF"), "block_rams": total("DP16KD"),
             "block_ram_kind": "DP16KD", "lut_rams": total("TRELLIS_DPR16X4"),
             "dsps": total("MULT18X18D")}
+
+
+def carry_chains(netlist_path):
+    """CCU2C carry chains in a Yosys JSON netlist of the ECP5: the cells whose carry-in no
+    other CCU2C drives. nextpnr-ecp5 packs two more CCU2C cells into every chain (one to
+    feed its carry in, one to bring its carry out), which :mod:`.capacity` counts."""
+    carries = [cell["connections"] for module in
+               json.loads(Path(netlist_path).read_text())["modules"].values()
+               for cell in module.get("cells", {}).values() if cell["type"] == "CCU2C"]
+    driven = {tuple(ports["COUT"]) for ports in carries}
+    return sum(tuple(ports["CIN"]) not in driven for ports in carries)
 
 
 def _run(command, cwd, deadline, log_name, watch=None):
@@ -442,6 +453,8 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         - ``utilisation`` (``ecp5``: percent of ``device`` per resource, ``LUT``,
           ``FF``, ``DP16KD``, ``DSP``, ``LUTRAM``; None for ``cyclonev``) and ``fits``
           (``ecp5``: all within 100 %; None for ``cyclonev``);
+        - ``carry_chains`` (``ecp5``: CCU2C chains, :func:`carry_chains`; each costs
+          nextpnr four LUT sites more than its cells);
         - ``outreg_packed`` (``ecp5``: DP16KD read ports given their output register,
           None for ``cyclonev``), ``outreg_registers`` (flip-flops absorbed),
           ``outreg_not_packed`` (reason -> read ports);
@@ -501,6 +514,7 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
         result["registers"] -= packing["registers"]
         result.update(outreg_packed=packing["packed"], outreg_registers=packing["registers"],
                       outreg_not_packed=packing["not_packed"])
+        result["carry_chains"] = carry_chains(netlist)
     depth = logic_depth_file(netlist, target)
     result["logic_levels"] = depth["levels"]
     result["logic_levels_path"] = {key: depth[key] for key in

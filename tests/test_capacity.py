@@ -5,7 +5,9 @@ import time
 
 import pytest
 
-from npstereo.gen.capacity import DEVICES, device, fit_message, utilisation
+import re
+
+from npstereo.gen.capacity import DEVICES, device, fit_message, usage, utilisation
 from npstereo.gen.synth import synthesise
 
 
@@ -14,7 +16,8 @@ def ecp5_utilisation(result):
 
 
 def _result(**counts):
-    base = {"logic": 0, "registers": 0, "block_rams": 0, "lut_rams": 0, "dsps": 0}
+    base = {"logic": 0, "registers": 0, "block_rams": 0, "lut_rams": 0, "dsps": 0,
+            "carry_chains": 0}
     return dict(base, **counts)
 
 
@@ -68,6 +71,38 @@ def test_small_design_fits_and_has_utilisation():
     assert result["utilisation"]["FF"] == round(100 * 8 / 83640, 1)
     cyclone = synthesise(design, "cyclonev", "top")
     assert cyclone["utilisation"] is None and cyclone["fits"] is None
+
+
+#: 40 comparisons of bytes (a carry chain each) and a 16x4 distributed RAM, fed by shift
+#: registers so that a few pins do.
+CHAINS_AND_LUT_RAM = """
+module top(input clk, input [7:0] d, input [3:0] wa, input [3:0] ra, input we,
+           output reg y, output reg [3:0] q);
+  reg [319:0] a, b;
+  reg [39:0] lt;
+  reg [3:0] mem [0:15];
+  integer i;
+  always @(posedge clk) begin
+    a <= {a[311:0], d};
+    b <= {b[311:0], a[319:312]};
+    for (i = 0; i < 40; i = i + 1) lt[i] <= a[8*i +: 8] < b[8*i +: 8];
+    y <= ^lt;
+    if (we) mem[wa] <= d[3:0];
+    q <= mem[ra];
+  end
+endmodule
+"""
+
+
+def test_lut_count_is_what_nextpnr_packs(tmp_path):
+    """The LUT count of the capacity check is nextpnr's TRELLIS_COMB count after packing
+    (less its two constant drivers): each carry chain takes four LUT sites more than its
+    cells, each DPR16X4 six."""
+    result = synthesise(CHAINS_AND_LUT_RAM, "ecp5", "top", pnr=True, freq=50, keep=tmp_path)
+    assert result["status"] == "ok", result
+    assert result["carry_chains"] == 40 and result["lut_rams"] == 1
+    packed = re.search(r"TRELLIS_COMB:\s+(\d+)/", (tmp_path / "place.log").read_text())
+    assert 0 <= int(packed.group(1)) - usage(result, DEVICES["ecp5-85k"])["LUT"] <= 2
 
 
 def test_device_table_has_a_reference_for_every_number():

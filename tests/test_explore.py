@@ -303,7 +303,7 @@ def test_pareto_front_and_recommendation():
 
 def test_fit_verdict_names_the_resource_on_each_device():
     big = {"logic": 158000, "registers": 1000, "block_rams": 10, "lut_rams": 0, "dsps": 0,
-           "memory_bits": 10_000_000}
+           "carry_chains": 0, "memory_bits": 10_000_000}
     assert utilisation(big, "ep2s180") == {"ALUT": 110.1, "FF": 0.7, "RAM bits": 106.6}
     assert fit_message(utilisation(big, "ep2s180")) == "does not fit (110 % ALUT, " \
                                                        "107 % RAM bits)"

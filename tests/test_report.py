@@ -330,6 +330,25 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     assert report_cache.seed_cache(sweep, tmp_path / "other") == 2
 
 
+def test_cached_ecp5_result_without_carry_chains_is_completed(tmp_path):
+    """A result cached before carry chains were counted is synthesised again (not placed
+    again): the count and the utilisation follow, the place-and-route figures stay."""
+    params = StereoParams(block=3, disparities=8, rounds=2, width=32, height=8)
+    digest = report_cache.configuration_digest(params, tmp_path)
+    old = {"target": "ecp5", "status": "ok", "message": "", "logic": 1, "registers": 1,
+           "block_rams": 0, "lut_rams": 0, "dsps": 0, "utilisation": {"LUT": 0.0},
+           "fits": True, "fmax_mhz": 123.0, "critical_path": "a -> b", "pnr": True,
+           "freq": 150.0}
+    path = cmd_report._path(tmp_path, params, "ecp5", True, 150.0, digest, "ecp5-85k")
+    report_cache.store_result(path, old)
+    assert cmd_report.lookup(params, ["ecp5"], pnr=True, cache=tmp_path) is None
+    result = cmd_report.evaluate(params, ["ecp5"], pnr=True, cache=tmp_path)["results"]["ecp5"]
+    assert result["carry_chains"] > 0 and result["fmax_mhz"] == 123.0
+    assert result["utilisation"]["LUT"] > 0.0 and result["logic"] == 1
+    stored = cmd_report.lookup(params, ["ecp5"], pnr=True, cache=tmp_path)
+    assert stored["results"]["ecp5"]["carry_chains"] == result["carry_chains"]
+
+
 def test_sweep_document_shows_what_the_cache_holds_of_unfinished_cells(tmp_path):
     """A configuration whose Cyclone V result is cached (another sweep measured it) but
     whose ECP5 result is not is in the document before its task runs: Cyclone V figures,
