@@ -83,7 +83,7 @@ def _clock(result):
     if result["status"] != "ok":
         return result["status"], "-"
     if not result.get("pnr"):
-        return "not placed", "-"
+        return "synthesis only", "-"
     return _number(result.get("fmax_mhz"), 1), _number(result.get("frames_per_second"), 1)
 
 

