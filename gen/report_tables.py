@@ -23,7 +23,7 @@ def _row(target, result):
     fmax = {"ok": _number(result["fmax_mhz"], 1), "does not fit": result["message"]}.get(
         result["status"], result["status"])
     return [target, f"{result['logic']:,} {result['logic_unit']}"
-            + (f" ({utilisation['LUT']:.0f} %)" if utilisation else ""),
+            + (f" ({utilisation['LUT']:.0f} % of the LUT sites)" if utilisation else ""),
             f"{result['registers']:,}",
             f"{result['block_rams']} {result['block_ram_kind']}", str(result["lut_rams"]),
             f"{result['memory_bits']:,}" + (f" (+{result['ffram_bits']:,} in FFs)"
@@ -98,8 +98,8 @@ def sweep_markdown(reports):
     lines = ["| transform | block | rows above | Cyclone V ALUTs | MLABs | paper LEs | ratio "
              "| registers | M10K | memory bits | paper bits | ratio | LUT levels |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    clock = ["| transform | block | rows above | ECP5 LUT4 | FF | DP16KD | LUT % | LUT levels "
-             "| Fmax MHz | frames/s | paper MHz |",
+    clock = ["| transform | block | rows above | ECP5 LUT4 | FF | DP16KD | LUT sites % "
+             "| LUT levels | Fmax MHz | frames/s | paper MHz |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for report in reports:
         p = report["params"]
