@@ -67,6 +67,9 @@ _FLOWS = {
 #: Bumped when the script or the parsing changes, so cached results are not reused.
 #: 2: netlist written for both targets, ECP5 output registers packed, logic levels,
 #: ECP5 capacity check. 4: nextpnr's timing-driven rip-up in the router (--tmg-ripup).
+#: A figure that synthesis alone gives (``carry_chains``) is not a reason to bump it: results
+#: without it are synthesised again when read (:func:`npstereo.gen.report_cache.incomplete`),
+#: and keep their place-and-route figures.
 FLOW_VERSION = 4
 
 
