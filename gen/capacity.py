@@ -81,8 +81,8 @@ def _ecp5(size, luts, blocks, multipliers, ram_pfus, table_luts, table_kbits):
         name=f"ecp5-{size}", part=f"LFE5U-{size[:-1].upper()}F", target="ecp5",
         nextpnr=f"--{size}", block_ram_bits=blocks * 18432,
         resources=(
-            Resource("LUT", luts, "LUT4 site as nextpnr packs them (logic; a carry cell as "
-                     "two and each carry chain four more; LUT RAM as six)",
+            Resource("LUT", luts, "LUT4 site, as nextpnr packs the design (logic; a carry "
+                     "cell as two and each carry chain four more; LUT RAM as six)",
                      f"{_NEXTPNR}: TRELLIS_COMB {luts:,}; {_ECP5_SHEET}: {table_luts}K LUTs"),
             Resource("FF", luts, "flip-flop", f"{_NEXTPNR}: TRELLIS_FF {luts:,}; two per "
                      "slice (data sheet section 2.2, PFU)"),
