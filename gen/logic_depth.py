@@ -26,10 +26,8 @@ How a path is counted (``docs/synthesis-flow.md``):
   cell as a level would make a counter look like 16 LUTs deep, which its delay is not.
 """
 
-import json
-from pathlib import Path
 
-__all__ = ["CARRY_WEIGHT", "logic_depth", "logic_depth_file"]
+__all__ = ["CARRY_WEIGHT", "logic_depth"]
 
 # Delays (ns) behind the carry weights. Carry, per carry cell on the dedicated carry wire:
 # ECP5 CCU2C (two bits) FCI->FCO 0.071 ns in nextpnr-ecp5 0.11's timing model (default
@@ -212,8 +210,3 @@ def _arrivals(start_bits, driver_arcs, weight):
                         arrival[bit] = candidate
                         via[bit] = (name, kind, source)
     return arrival, via
-
-
-def logic_depth_file(path, target):
-    """:func:`logic_depth` of a ``write_json`` file."""
-    return logic_depth(json.loads(Path(path).read_text()), target)

@@ -42,7 +42,7 @@ from pathlib import Path
 from ..params import UserError
 from .atomic import write_text
 from .capacity import device as find_device, fit_message, utilisation
-from .logic_depth import logic_depth_file
+from .logic_depth import logic_depth
 from .outreg import pack_outreg_file
 
 __all__ = ["TARGETS", "ENGINES", "ToolError", "tool_versions", "synthesise", "run_yosys",
@@ -206,12 +206,12 @@ def _resources(target, cells):
             "dsps": total("MULT18X18D")}
 
 
-def carry_chains(netlist_path):
-    """CCU2C carry chains in a Yosys JSON netlist of the ECP5: the cells whose carry-in no
-    other CCU2C drives. nextpnr-ecp5 packs two more CCU2C cells into every chain (one to
-    feed its carry in, one to bring its carry out), which :mod:`.capacity` counts."""
-    carries = [cell["connections"] for module in
-               json.loads(Path(netlist_path).read_text())["modules"].values()
+def carry_chains(netlist):
+    """CCU2C carry chains in a Yosys JSON netlist (parsed) of the ECP5: the cells whose
+    carry-in no other CCU2C drives. nextpnr-ecp5 packs two more CCU2C cells into every
+    chain (one to feed its carry in, one to bring its carry out), which :mod:`.capacity`
+    counts."""
+    carries = [cell["connections"] for module in netlist["modules"].values()
                for cell in module.get("cells", {}).values() if cell["type"] == "CCU2C"]
     driven = {tuple(ports["COUT"]) for ports in carries}
     return sum(tuple(ports["CIN"]) not in driven for ports in carries)
@@ -517,8 +517,11 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
         result["registers"] -= packing["registers"]
         result.update(outreg_packed=packing["packed"], outreg_registers=packing["registers"],
                       outreg_not_packed=packing["not_packed"])
-        result["carry_chains"] = carry_chains(netlist)
-    depth = logic_depth_file(netlist, target)
+    # Parsed once: a large core's netlist is hundreds of megabytes of JSON.
+    design = json.loads(netlist.read_text())
+    if target == "ecp5":
+        result["carry_chains"] = carry_chains(design)
+    depth = logic_depth(design, target)
     result["logic_levels"] = depth["levels"]
     result["logic_levels_path"] = {key: depth[key] for key in
                                    ("from", "to", "luts", "carry_cells", "cells",

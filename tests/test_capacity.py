@@ -5,8 +5,7 @@ import time
 
 import pytest
 
-import re
-
+from npstereo.gen import synth
 from npstereo.gen.capacity import DEVICES, device, fit_message, usage, utilisation
 from npstereo.gen.synth import synthesise
 
@@ -101,7 +100,7 @@ def test_lut_count_is_what_nextpnr_packs(tmp_path):
     result = synthesise(CHAINS_AND_LUT_RAM, "ecp5", "top", pnr=True, freq=50, keep=tmp_path)
     assert result["status"] == "ok", result
     assert result["carry_chains"] == 40 and result["lut_rams"] == 1
-    packed = re.search(r"TRELLIS_COMB:\s+(\d+)/", (tmp_path / "place.log").read_text())
+    packed = synth._PACKED.search((tmp_path / "place.log").read_text())
     assert 0 <= int(packed.group(1)) - usage(result, DEVICES["ecp5-85k"])["LUT"] <= 2
 
 
