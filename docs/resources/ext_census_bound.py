@@ -1,0 +1,98 @@
+"""A lower bound on the logic of an exact ext. census core whose memory is at most the
+paper's (issue 10), at the paper's sizes: prints the table of docs/resources.md
+"Ext. census memory".
+
+    .venv/bin/python docs/resources/ext_census_bound.py        # about 2 minutes
+
+The box sum of row y needs the costs of rows y - 1, y and y + 1 at every (column,
+disparity). A cost of an earlier row is either kept (at least cost_bits - 1 bits per
+(column, disparity): its parity is the only part that is free to compute again, from the
+pixels' low bits) or computed again (a sum of k absolute differences). The right
+transforms of the rows a unit computes are kept (R words of 8 k bits per unit and row)
+or computed again (k absolute differences per unit and row). With the memory at most the
+paper's, and nothing else in the memory but the B - 1 rows of pixels every window needs,
+this finds the fewest sums of differences per clock, and counts their logic at what one
+sum costs in this flow (Yosys ``synth_intel_alm``, the flow the bar is measured with; the
+cheapest of the two leaf forms and register spacings below, synthesised here). Everything
+else in a core (transforms, aggregation, minimum trees, control) counts as nothing, so the
+real core is larger still.
+
+The floor column needs no synthesis: 8 ALUTs per 8-bit difference (one per result bit)
+and half an ALUT per bit a three-input adder tree removes, per sum and per transform.
+"""
+
+from amaranth.back import verilog
+from amaranth.hdl import Elaboratable, Module, Mux, Signal
+
+from npstereo.gen.paper_resources import (PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_LOGIC,
+                                          PAPER_MEMORY, PAPER_ROUNDS, PAPER_SIZE)
+from npstereo.gen.synth import synthesise
+from npstereo.hdl.trees import _add, build_tree, register_plan, sad_leaves
+
+W = PAPER_SIZE[0]
+D, R, A = PAPER_DISPARITIES, PAPER_ROUNDS, 3
+UNITS = D // R
+#: The EP2S180's logic, the bar for every ext. census cell.
+DEVICE_ALUTS = 143520
+
+
+class _Sum(Elaboratable):
+    """sum |a_n - b_n| over k byte pairs between registers, as the cost units build it."""
+
+    def __init__(self, k, leaf_form, every):
+        self.k, self.leaf_form, self.every = k, leaf_form, every
+        self.a, self.b = Signal(8 * k), Signal(8 * k)
+        self.en, self.sum = Signal(), Signal(20)
+
+    def elaborate(self, platform):
+        m = Module()
+        a, b = Signal(8 * self.k), Signal(8 * self.k)
+        m.d.sync += [a.eq(self.a), b.eq(self.b)]
+        pairs = [(a.word_select(n, 8), b.word_select(n, 8)) for n in range(self.k)]
+        if self.leaf_form == "inverted":
+            leaves = sad_leaves(pairs)
+        else:
+            # 2 sum max(a, b) - sum a - sum b: the two sums are one per pixel, not counted.
+            leaves = [Mux(x < y, y, x) for x, y in pairs]
+        plan = register_plan(len(leaves), self.every, 1, False, 8)
+        m.d.sync += self.sum.eq(build_tree(m, self.en, [(v,) for v in leaves], _add, plan)[0])
+        return m
+
+
+def sum_aluts(k):
+    counts = []
+    for form in ("inverted", "max"):
+        for every in (2, 3):
+            top = _Sum(k, form, every)
+            text = verilog.convert(top, ports=[top.a, top.b, top.en, top.sum], name="top")
+            counts.append(synthesise(text, "cyclonev", "top")["logic"])
+    return min(counts)
+
+
+def main():
+    print("| block | memory budget | cost rows kept | sums per clock | right rows "
+          "computed again | bound (ALUT) | floor (ALUT) | bar (ALUT) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for i, block in enumerate(PAPER_BLOCKS):
+        k = block * block - 1
+        cost_bits = (255 * k).bit_length()
+        budget = PAPER_MEMORY["ext-census"][i]
+        free = budget - 2 * W * 8 * (block - 1)
+        right_row = R * 8 * k                   # one unit's right words of one row
+        cost_row = W * R * (cost_bits - 1)      # one unit's costs of one row
+        free -= UNITS * A * right_row
+        if free >= 0:
+            kept, again = min(UNITS * (A - 1), free // (cost_row - right_row)), 0
+        else:
+            kept, again = 0, -(free // right_row)
+        sums = UNITS * A - kept
+        bound = sums * sum_aluts(k) + again * 8 * k
+        floor = sums * (8 * k + (8 * k - cost_bits) // 2) + (again + 2 * A) * 8 * k
+        paper = PAPER_LOGIC["ext-census"][i]
+        bar = DEVICE_ALUTS if paper is None else min(DEVICE_ALUTS, int(0.7 * paper))
+        print(f"| {block}x{block} | {budget:,} | {kept} | {sums} | {again} | {bound:,} | "
+              f"{floor:,} | {bar:,} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
