@@ -70,8 +70,8 @@ def sum_aluts(k):
 
 
 def main():
-    print("| block | memory budget | cost rows kept | sums per clock | right rows "
-          "computed again | bound (ALUT) | floor (ALUT) | bar (ALUT) |")
+    print("| block | memory budget | unit rows of costs kept | sums per clock | unit rows "
+          "of right transforms computed again | bound (ALUT) | floor (ALUT) | bar (ALUT) |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     for i, block in enumerate(PAPER_BLOCKS):
         k = block * block - 1
@@ -81,17 +81,18 @@ def main():
         right_row = R * 8 * k                   # one unit's right words of one row
         cost_row = W * R * (cost_bits - 1)      # one unit's costs of one row
         free -= UNITS * A * right_row
+        # Fractions count: a unit may keep the costs of some columns or rounds only.
         if free >= 0:
-            kept, again = min(UNITS * (A - 1), free // (cost_row - right_row)), 0
+            kept, again = min(UNITS * (A - 1), free / (cost_row - right_row)), 0
         else:
-            kept, again = 0, -(free // right_row)
+            kept, again = 0, -free / right_row
         sums = UNITS * A - kept
         bound = sums * sum_aluts(k) + again * 8 * k
-        floor = sums * (8 * k + (8 * k - cost_bits) // 2) + (again + 2 * A) * 8 * k
+        floor = sums * (8 * k + (8 * k - cost_bits) / 2) + (again + 2 * A) * 8 * k
         paper = PAPER_LOGIC["ext-census"][i]
         bar = DEVICE_ALUTS if paper is None else min(DEVICE_ALUTS, int(0.7 * paper))
-        print(f"| {block}x{block} | {budget:,} | {kept} | {sums} | {again} | {bound:,} | "
-              f"{floor:,} | {bar:,} |", flush=True)
+        print(f"| {block}x{block} | {budget:,} | {kept:.1f} | {sums:.1f} | {again:.1f} | "
+              f"{bound:,.0f} | {floor:,.0f} | {bar:,} |", flush=True)
 
 
 if __name__ == "__main__":
