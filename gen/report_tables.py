@@ -145,6 +145,11 @@ def sweep_markdown(reports):
 
 
 def _router_note(result):
-    """Said beside a critical path when nextpnr routed without timing-driven rip-up."""
-    reason = result.get("ripup_abandoned")
-    return f" ({reason})" if reason else ""
+    """Said beside a critical path when nextpnr routed without timing-driven rip-up, or
+    with the clock on a pin the flow chose (:data:`~npstereo.gen.synth.CLOCK_PIN`)."""
+    notes = [result.get("ripup_abandoned")]
+    if result.get("clock_pin"):
+        notes.append(f"clock on pin {result['clock_pin']}: the placer's pad could not "
+                     "reach the clock network")
+    notes = [note for note in notes if note]
+    return f" ({'; '.join(notes)})" if notes else ""

