@@ -34,8 +34,8 @@ from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .plan import (calculation_timing, centre_copies, cost_rows, masks_after_compare,
-                   row_sum_plan, store_slices, transformed_rows, unit_skews, valid_copy_groups,
-                   vertical_bits, window_first_row, window_pixels)
+                   row_sum_plan, store_slices, transformed_rows, unit_skews, vertical_bits,
+                   window_first_row, window_pixels)
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
@@ -279,25 +279,6 @@ class CalculationStage(wiring.Component):
                                                             f"store{i}_{g}_address{offset}")
             return counters[i, offset, g]
 
-        groups = valid_copy_groups(len(bounds))
-        copies = {}
-
-        def unit_valid(i, at, g):
-            """The valid that slice g of unit i (i >= 1) writes by, slot-aligned at
-            ``at - 1``: shared by the unit's slices in one group, else a copy of it for
-            each group, loaded a clock after the latch one clock earlier and ANDed with
-            the group's first address counter's ``!= R`` (which never fails) so that
-            synthesis cannot merge the copies back into one register."""
-            if len(groups) == 1 or at - 2 < start:
-                return valid.at(at - 1)
-            group = next(h for h, members in enumerate(groups) if g in members)
-            if (i, group) not in copies:
-                copy = Signal(name=f"store{i}_valid{group}")
-                first = groups[group][0]
-                m.d.sync += copy.eq(valid.at(at - 2) & (address(i, at, first) != rounds))
-                copies[i, group] = copy
-            return copies[i, group]
-
         operands, reads = [], []
         for i in range(units):
             at = self.stored + skews[i]
@@ -323,12 +304,12 @@ class CalculationStage(wiring.Component):
                 at = self.stored + skews[i - 1] + 1
                 place = address(i, at, g)
                 enable = Signal(name=f"store{i}_{g}_write")
-                m.d.sync += enable.eq(unit_valid(i, at, g) & (place != rounds))
+                m.d.sync += enable.eq(valid.at(at - 1) & (place != rounds))
                 stores[g].write(place, operands[i - 1][low:high], enable)
         if rounds > 1:
             # Unit 0: the newest word in the slot's first clock at the transforms, the last
             # unit's words of rounds 0 .. R-2 in the R - 1 clocks after it, one slot later.
-            valids = self._unit0_valids(m, slots, valid, before, groups, address)
+            previous = slots.delay(valid.at(start), start, rounds, "store0_previous_valid")
             for g, (low, high) in enumerate(bounds):
                 place = address(0, start, g)
                 # place == R - 1 a clock before the slot's first clock at the transforms
@@ -336,37 +317,11 @@ class CalculationStage(wiring.Component):
                 coming = place == rounds - 1
                 newest_now = Signal(name=f"store0_{g}_newest")
                 enable = Signal(name=f"store0_{g}_write")
-                newest_valid, previous = valids[g]
                 m.d.sync += [newest_now.eq(coming),
-                             enable.eq(Mux(coming, newest_valid, previous))]
+                             enable.eq(Mux(coming, before.valid, previous))]
                 reads[0][1][g].write(place, Mux(newest_now, newest[low:high],
                                                 operands[-1][low:high]), enable)
         return operands
-
-    def _unit0_valids(self, m, slots, valid, before, groups, address):
-        """(newest word's valid, previous slot's valid) for each slice of unit 0, the
-        first slot-aligned at ``transformed - 1`` (``before``), the second at
-        ``transformed + R``: shared by all slices in one group, else a copy of each per
-        group, each a register loaded from the value aligned a clock earlier and ANDed with
-        the group's first address counter's ``!= R`` (never false; keeps the copies apart).
-        Census 13x13's sixteen slices took both from one register each
-        (``transformed_tag_ahead_s1`` to an enable, 10.12 ns of wire, 98.8 MHz on ECP5)."""
-        start, rounds = self.transformed, self.params.rounds
-        slices = sum(len(members) for members in groups)
-        if len(groups) == 1 or start < 2:
-            previous = slots.delay(valid.at(start), start, rounds, "store0_previous_valid")
-            return [(before.valid, previous)] * slices
-        ahead = slots.delay(self.tag.valid, 0, start - 2, "store0_valid_ahead")
-        earlier = valid.at(start + rounds - 1)
-        valids = []
-        for h, members in enumerate(groups):
-            counter_ok = address(0, start, members[0]) != rounds
-            newest_valid = Signal(name=f"store0_newest_valid{h}")
-            previous = Signal(name=f"store0_previous_valid{h}")
-            m.d.sync += [newest_valid.eq(ahead & counter_ok),
-                         previous.eq(earlier & counter_ok)]
-            valids += [(newest_valid, previous)] * len(members)
-        return valids
 
     def _left_chain(self, m, slots, newest):
         """The left word of each unit, slot-aligned at its operand: a register per step of

@@ -22,8 +22,7 @@ from .trees import (DEFAULT_EVERY, PAIRED_ADDER_BITS, min_tree_latency, popcount
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "transform_plan", "cost_plan", "min_tree_clocks", "evaluation_latency", "CENTRE_FANOUT",
-           "centre_copies", "STORE_SLICE_BITS", "store_slices", "ENABLE_FANOUT_SLICES",
-           "SLICES_PER_VALID_COPY", "valid_copy_groups", "INPUT_LATENCY", "cost_rows",
+           "centre_copies", "STORE_SLICE_BITS", "store_slices", "INPUT_LATENCY", "cost_rows",
            "transformed_rows", "window_rows", "window_first_row", "window_pixels",
            "masks_after_compare", "census_registers_compared",
            "vertical_bits", "VERTICAL_READ", "BANK_CHOICE", "COST_BANK", "cost_banks",
@@ -203,22 +202,6 @@ def centre_copies(params):
 #: register driving a whole store (census 9x9: 60 LUT RAM cells) was 7 ns of routing on
 #: ECP5.
 STORE_SLICE_BITS = 32
-
-
-#: Slices of a store whose write enables one register of the slot's valid may load: census
-#: 9x9's eight reach, ext. census 7x7's twelve did not (``store_valid_s2`` to unit 1's
-#: enables, 10.2 ns of wire, one LUT, 98.0 MHz on ECP5).
-ENABLE_FANOUT_SLICES = 8
-#: Slices per copy of the valid where a unit has more than :data:`ENABLE_FANOUT_SLICES`.
-SLICES_PER_VALID_COPY = 4
-
-
-def valid_copy_groups(slices):
-    """Groups of a unit's store slices whose write enables load from one copy of the
-    slot's valid: one group up to :data:`ENABLE_FANOUT_SLICES` slices (those netlists
-    unchanged), else :data:`SLICES_PER_VALID_COPY` to a copy."""
-    size = slices if slices <= ENABLE_FANOUT_SLICES else SLICES_PER_VALID_COPY
-    return [range(low, min(slices, low + size)) for low in range(0, slices, size)]
 
 
 def store_slices(width):

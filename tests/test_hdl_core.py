@@ -18,7 +18,6 @@ from amaranth.lib import memory
 from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan, trees
 from npstereo.hdl import core as core_module
 from npstereo.hdl.core import NpStereoCore
-from npstereo.hdl.verilog import core_verilog
 from npstereo.params import ParameterError, StereoParams
 
 from hdl_helpers import RESET, check_frames, frame_beats
@@ -137,31 +136,6 @@ def test_spaced_sum_of_differences(monkeypatch):
     pairs = [stereo_pair("layers", 7, 20, 17), stereo_pair("independent", 7, 20, 18)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                  valid_prob=GAPS, ready_prob=GAPS, seed=7)
-
-
-def test_store_enables_from_copies_of_the_valid(monkeypatch):
-    """Store write enables loaded from a copy of the slot's valid per group of slices
-    (what words of more than eight slices do: ext. census 7x7's twelve), here one copy
-    per slice of census 7x7's five (the rows above as pixels, four units): same frames
-    with stalls, back to back."""
-    monkeypatch.setattr(plan, "ENABLE_FANOUT_SLICES", 1)
-    monkeypatch.setattr(plan, "SLICES_PER_VALID_COPY", 1)
-    params = StereoParams(transform="census", block=7, disparities=8, rounds=2,
-                          lr_threshold=1, width=20, height=8)
-    assert len(plan.store_slices(3 * params.transform_bits)) == 5
-    verilog = core_verilog(params)
-    assert "store3_valid4" in verilog and "store0_newest_valid4" in verilog
-    pairs = [stereo_pair("layers", 8, 20, 19), stereo_pair("independent", 8, 20, 20)]
-    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
-                 valid_prob=GAPS, ready_prob=GAPS, seed=9)
-
-
-def test_store_enables_share_the_valid_up_to_eight_slices():
-    """Words of up to eight slices (census 9x9 and every smaller core) keep one valid
-    per unit: those netlists, and the clocks measured on them, stay as they were."""
-    assert plan.valid_copy_groups(8) == [range(0, 8)]
-    assert plan.valid_copy_groups(12) == [range(0, 4), range(4, 8), range(8, 12)]
-    assert plan.valid_copy_groups(18)[-1] == range(16, 18)
 
 
 def test_sum_of_differences_spacing_by_block():
