@@ -592,15 +592,3 @@ def _place_and_route_once(result, build, part, freq, deadline, constraints):
     if failure is None:
         result["fmax_mhz"], result["critical_path"] = _timing(build / "report.json")
     return failure
-    route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
-                       f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
-    failure = _run(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",
-                   watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
-    result["router"], result["ripup_abandoned"] = "router2, timing-driven rip-up", None
-    if failure is not None and failure.startswith(_HOPELESS):
-        result["router"], result["ripup_abandoned"] = "router2", failure
-        shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
-        failure = _run(route, build, deadline, "nextpnr.out")
-    if failure is None:
-        result["fmax_mhz"], result["critical_path"] = _timing(build / "report.json")
-    return failure
