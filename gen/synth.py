@@ -545,9 +545,10 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
 #: nextpnr-ecp5 places an unconstrained clock input on any pad, and from some pads its
 #: global router cannot reach the clock network: a variant of ext. census 7x7 ("Failed to
 #: route arc 0.0 of net 'clk$TRELLIS_IO_IN', from X65/Y0/JPADDIA_PIO to
-#: X0/Y0/G_CLKI_TDCC0"; docs/synthesis-flow.md). A board puts its clock on a clock input, so the flow then
-#: places again with ``clk`` on pin G2 of the CABGA381 (a clock input: the ULX3S's clock
-#: pin on every ECP5 size in that package), and records the pin in ``clock_pin``.
+#: X0/Y0/G_CLKI_TDCC0"; docs/synthesis-flow.md). A board puts its clock on a clock input,
+#: so the flow then places again with ``clk`` on pin G2 of the CABGA381 (a clock input:
+#: the ULX3S's clock pin on every ECP5 size in that package), and records the pin in
+#: ``clock_pin``.
 CLOCK_PIN = "G2"
 _CLOCK_UNROUTED = re.compile(r"Failed to route arc \S+ of net 'clk\$")
 

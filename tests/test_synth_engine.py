@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from npstereo.gen import synth
+from npstereo.gen import report_tables, synth
 from npstereo.gen.synth import ENGINES, ToolError, run_yosys, synthesise, tool_versions
 from npstereo.hdl.verilog import core_verilog
 from npstereo.params import StereoParams, UserError
@@ -270,6 +270,7 @@ def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch
     assert result["clock_pin"] == synth.CLOCK_PIN
     assert attempts[0] == [] and "clock.lpf" in attempts[1]
     assert "pin 'clk$tr_io' constrained to Bel" in (tmp_path / "place.log").read_text()
+    assert "clock on pin G2" in report_tables._router_note(result)
 
 
 def test_other_routing_failures_are_not_placed_again(monkeypatch):
