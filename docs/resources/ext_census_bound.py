@@ -24,16 +24,17 @@ and half an ALUT per bit a three-input adder tree removes, per sum and per trans
 from amaranth.back import verilog
 from amaranth.hdl import Elaboratable, Module, Mux, Signal
 
+from npstereo.gen.capacity import DEVICES
 from npstereo.gen.paper_resources import (PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_LOGIC,
                                           PAPER_MEMORY, PAPER_ROUNDS, PAPER_SIZE)
 from npstereo.gen.synth import synthesise
-from npstereo.hdl.trees import _add, build_tree, register_plan, sad_leaves
+from npstereo.hdl.trees import build_sad, build_sum, register_plan, sad_plan
 
 W = PAPER_SIZE[0]
 D, R, A = PAPER_DISPARITIES, PAPER_ROUNDS, 3
 UNITS = D // R
 #: The EP2S180's logic, the bar for every ext. census cell.
-DEVICE_ALUTS = 143520
+DEVICE_ALUTS = DEVICES["ep2s180"].capacity("ALUT")
 
 
 class _Sum(Elaboratable):
@@ -49,13 +50,13 @@ class _Sum(Elaboratable):
         a, b = Signal(8 * self.k), Signal(8 * self.k)
         m.d.sync += [a.eq(self.a), b.eq(self.b)]
         pairs = [(a.word_select(n, 8), b.word_select(n, 8)) for n in range(self.k)]
-        if self.leaf_form == "inverted":
-            leaves = sad_leaves(pairs)
+        if self.leaf_form == "inverted":    # the cost units' own sum
+            total = build_sad(m, self.en, pairs, sad_plan(self.k, self.every))
         else:
             # 2 sum max(a, b) - sum a - sum b: the two sums are one per pixel, not counted.
             leaves = [Mux(x < y, y, x) for x, y in pairs]
-        plan = register_plan(len(leaves), self.every, 1, False, 8)
-        m.d.sync += self.sum.eq(build_tree(m, self.en, [(v,) for v in leaves], _add, plan)[0])
+            total = build_sum(m, self.en, leaves, register_plan(self.k, self.every, 1, False, 8))
+        m.d.sync += self.sum.eq(total)
         return m
 
 
