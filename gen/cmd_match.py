@@ -12,8 +12,9 @@ import numpy as np
 
 from ..golden.data import read_image, to_gray
 from ..golden.pipeline import disparity_map
-from ..params import (LINE_BUFFERS, P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1,
-                      SGM_DEFAULT_P2, SGM_MAX_ADAPT, TRANSFORMS, StereoParams, UserError)
+from ..params import (LINE_BUFFERS, LUT_INPUTS, P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT,
+                      SGM_DEFAULT_P1, SGM_DEFAULT_P2, SGM_MAX_ADAPT, TRANSFORMS, StereoParams,
+                      UserError)
 from .atomic import atomic_path
 from .images import save_disparity_png
 
@@ -97,6 +98,11 @@ def add_hardware_arguments(parser):
                              "aggregation: their pixels or their transformed pixels (the "
                              "costs are computed again), or their costs; auto: pixels for "
                              "census, costs for ext-census, else transforms (default auto)")
+    parser.add_argument("--lut-inputs", type=int, choices=LUT_INPUTS, default=4,
+                        help="inputs of the target fabric's LUTs, which the sums of absolute "
+                             "differences (ext-census cost, ext-rank transform) are arranged "
+                             "for: 4 for ECP5, iCE40, Gowin; 6 for Intel (ALMs) and "
+                             "AMD/Xilinx (default 4)")
 
 
 def _sgm_options(args):
@@ -141,6 +147,7 @@ def params_from_args(args, transform=None, block=None, aggregation=None):
         disparities=args.disparities, rounds=args.rounds, aggregation=aggregation,
         lr_threshold=None if args.no_lr_check else args.lr_threshold,
         line_buffer=getattr(args, "line_buffer", "auto"),
+        lut_inputs=getattr(args, "lut_inputs", 4),
         p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
         p2_adapt=adapt if sgm else None)
 

@@ -79,7 +79,8 @@ class MatchingCost(wiring.Component):
     def _ext_census_cost(self, m):
         pairs = [(self.left.word_select(n, 8), self.right.word_select(n, 8))
                  for n in range(self.params.neighbours)]
-        return build_sad(m, self.en, pairs, self.plan)[:self.params.cost_bits]
+        return build_sad(m, self.en, pairs, self.plan,
+                         self.params.lut_inputs)[:self.params.cost_bits]
 
     def elaborate(self, platform):
         m = Module()

@@ -88,7 +88,8 @@ def _unit_plan(tree, params, every, depth):
     if tree == "popcount":
         return popcount_plan(params.neighbours, every, depth, registered)
     if tree == "sad":
-        return sad_plan(params.neighbours, every, depth, registered)
+        return sad_plan(params.neighbours, every, depth, registered,
+                        params.lut_inputs)
     return register_plan(params.neighbours if tree == "sum" else 1, every, depth, registered)
 
 
@@ -135,6 +136,9 @@ SPACED_POPCOUNT_ABOVE = 256
 #: pairs: 1,704 LUT4 against 1,560, 4.6 LUT levels against 3.6). From 13x13 on ext. census
 #: is too large for the ECP5-85k, the largest ECP5 (122 % of its LUTs at 13x13, 159 % at
 #: 15x15), and at 19x19 it was 4.1 % over the paper's EP2S180 (138,648 ALUTs now, within).
+#: Arranged for 6-input LUTs (``lut_inputs`` 6) the sum is smaller still with the usual
+#: spacing, and the wider one does not pay: 8,877 ALUTs and 3.6 levels against 10,369 and
+#: 9.3 (360 pairs, Cyclone V).
 SPACED_SAD_ABOVE = 120
 
 
@@ -148,7 +152,8 @@ def cost_plan(params, every=DEFAULT_EVERY):
     difference.
     """
     tree = {"census": "popcount", "ext-census": "sad"}.get(params.transform)
-    if tree == "sad" and every and params.neighbours > SPACED_SAD_ABOVE:
+    if (tree == "sad" and every and params.neighbours > SPACED_SAD_ABOVE
+            and params.lut_inputs < 6):
         every = max(every, 3)
     if tree == "popcount" and params.neighbours <= SPACED_POPCOUNT_ABOVE:
         # A register after every adder level: two of the popcount's short adders in one

@@ -154,7 +154,8 @@ class ExtRank(_WindowTransform):
     """Eq. 7: sum of |P - P'| over the neighbours (differences, then an adder tree)."""
 
     def _value(self, m, centres, neighbours):
-        total = build_sad(m, self.en, list(zip(centres, neighbours)), self.plan)
+        total = build_sad(m, self.en, list(zip(centres, neighbours)), self.plan,
+                          self.params.lut_inputs)
         return total[:self.params.transform_bits]
 
 

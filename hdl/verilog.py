@@ -37,7 +37,8 @@ def header(params):
         f"  with Amaranth {_version('amaranth')}",
         f"  transform={params.transform} block={params.block} disparities={params.disparities}"
         f" rounds={params.rounds} aggregation={aggregation} lr_threshold={lr}",
-        f"  width={params.width} height={params.height} rows above kept as {rows}",
+        f"  width={params.width} height={params.height} rows above kept as {rows}"
+        f" lut_inputs={params.lut_inputs}",
         f"  s_axis_tdata[15:0] = {{right, left}}; m_axis_tdata[{output_width(params) - 1}:0]"
         f" = {{valid, 0..., disparity[{params.disparity_bits - 1}:0]}}",
         f"  one output word per input pixel; {params.rounds} clock(s) per pixel; "

@@ -13,7 +13,7 @@ loaders and pipeline, file names in the commands.
 import numbers
 from dataclasses import dataclass, replace
 
-__all__ = ["TRANSFORMS", "LINE_BUFFERS", "SGM", "SGM_PATH_COUNT", "SGM_DEFAULT_P1",
+__all__ = ["TRANSFORMS", "LINE_BUFFERS", "LUT_INPUTS", "SGM", "SGM_PATH_COUNT", "SGM_DEFAULT_P1",
            "SGM_DEFAULT_P2", "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT", "P2_ADAPT_OFF",
            "UserError", "ParameterError", "StereoParams", "max_path_penalty",
            "check_penalties", "sgm_path_cost_bits", "sgm_summed_cost_bits"]
@@ -26,6 +26,11 @@ TRANSFORMS = ("rank", "census", "ext-rank", "ext-census")
 #: (the costs of those rows are computed again, A cost units per disparity); "auto" takes
 #: whichever is cheaper overall for the transform (docs/hardware.md).
 LINE_BUFFERS = ("auto", "costs", "transforms", "pixels")
+
+#: LUT sizes the hardware's sums of absolute differences are arranged for: 4 (ECP5, iCE40,
+#: Gowin: the inverted differences go to adders) or 6 (Intel ALMs, AMD/Xilinx: three
+#: differences at a time go to 3:2 compressors whose LUTs also invert them).
+LUT_INPUTS = (4, 6)
 
 #: The ``aggregation`` value that replaces the A x A box by semi-global aggregation along
 #: the four raster-order paths (docs/semantics.md, "Semi-global aggregation").
@@ -152,6 +157,10 @@ class StereoParams:
     line_buffer : str
         One of :data:`LINE_BUFFERS`: the hardware's memory for the vertical aggregation.
         It changes resources, never a result.
+    lut_inputs : int
+        One of :data:`LUT_INPUTS`: the inputs of the target fabric's LUTs, which the sums of
+        absolute differences (the ext. census cost, the ext. rank transform) are arranged
+        for. It changes resources, never a result.
     p1, p2 : int or None
         SGM penalties, 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax). With
         ``aggregation="sgm"`` a ``None`` becomes :data:`SGM_DEFAULT_P1` /
@@ -173,6 +182,7 @@ class StereoParams:
     width: int | None = None
     height: int | None = None
     line_buffer: str = "auto"
+    lut_inputs: int = 4
     p1: int | None = None
     p2: int | None = None
     p2_adapt: int | None = None
@@ -219,6 +229,9 @@ class StereoParams:
         if self.line_buffer not in LINE_BUFFERS:
             raise ParameterError(f"line buffer must be one of {', '.join(LINE_BUFFERS)}, "
                                  f"not {self.line_buffer!r}")
+        if not _is_int(self.lut_inputs) or self.lut_inputs not in LUT_INPUTS:
+            raise ParameterError(f"lut inputs must be one of "
+                                 f"{', '.join(map(str, LUT_INPUTS))}, not {self.lut_inputs!r}")
 
     def _resolve_penalties(self):
         """Validate the SGM penalties and store the defaults in place of ``None``."""
@@ -356,8 +369,9 @@ class StereoParams:
         lr = "off" if self.lr_threshold is None else str(self.lr_threshold)
         size = "" if self.width is None else f" {self.width}x{self.height}"
         buffer = "" if self.line_buffer == "auto" else f" LB={self.line_buffer}"
+        lut = "" if self.lut_inputs == 4 else f" LUT{self.lut_inputs}"
         return (f"{self.transform} {self.block}x{self.block} D={self.disparities} "
-                f"R={self.rounds} {self.describe_aggregation()} LR={lr}{size}{buffer}")
+                f"R={self.rounds} {self.describe_aggregation()} LR={lr}{size}{buffer}{lut}")
 
     def describe_aggregation(self):
         """The aggregation alone: ``A=3``, or ``SGM P1=24 P2=79 t=5`` (``t=off``)."""

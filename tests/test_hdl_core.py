@@ -48,17 +48,23 @@ MATRIX = [
     ("rank", 3, 16, 4, 5, None, "independent", "pixels"),
     ("ext-census", 3, 8, 1, 3, 2, "layers", "pixels"),
     ("ext-rank", 5, 12, 3, 3, 0, "independent", "pixels"),
+    # Sums of absolute differences arranged for 6-input LUTs.
+    ("ext-census", 5, 8, 2, 3, 1, "layers", "costs", 6),
+    ("ext-census", 3, 16, 4, 3, None, "independent", "pixels", 6),
+    ("ext-rank", 7, 8, 1, 3, 2, "layers", "transforms", 6),
 ]
 
 
-@pytest.mark.parametrize("transform,block,disparities,rounds,aggregation,lr,image,line_buffer",
-                         [row + ("auto",) * (8 - len(row)) for row in MATRIX])
+@pytest.mark.parametrize(
+    "transform,block,disparities,rounds,aggregation,lr,image,line_buffer,lut_inputs",
+    [row + ("auto", 4)[len(row) - 7:] for row in MATRIX])
 def test_matches_golden(transform, block, disparities, rounds, aggregation, lr, image,
-                        line_buffer):
+                        line_buffer, lut_inputs):
     width, height = disparities + 12, 8
     params = StereoParams(transform=transform, block=block, disparities=disparities,
                           rounds=rounds, aggregation=aggregation, lr_threshold=lr,
-                          width=width, height=height, line_buffer=line_buffer)
+                          width=width, height=height, line_buffer=line_buffer,
+                          lut_inputs=lut_inputs)
     pair = stereo_pair(image, height, width, block * 100 + disparities + rounds, disparities)
     check_frames(params, [pair], frame_beats(*pair), valid_prob=GAPS, ready_prob=GAPS,
                  seed=rounds)

@@ -291,6 +291,37 @@ def test_matching_cost_matches_golden(transform, block, every):
                         seed=block * 10 + every + 1)
 
 
+# Sums of absolute differences arranged for 6-input LUTs (compressors in front of the
+# adders): the ext. rank transform and the ext. census cost, every spacing and large blocks.
+@pytest.mark.parametrize("block,every", TRANSFORM_CASES)
+def test_sums_of_differences_for_six_input_luts_match_golden(block, every):
+    check_transform(StereoParams(transform="ext-rank", block=block, lut_inputs=6), every,
+                    seed=block * 10 + every + 2)
+    check_matching_cost(StereoParams(transform="ext-census", block=block, lut_inputs=6),
+                        every, seed=block * 10 + every + 3)
+
+
+def test_broken_compressor_is_caught(monkeypatch):
+    """The compressors' carries at their own place instead of one place up."""
+    def carries_in_place(values):
+        out = []
+        for i in range(0, len(values), 3):
+            group = values[i:i + 3]
+            if len(group) < 3:
+                out += group
+                continue
+            x, y, z = group
+            out += [x ^ y ^ z, (x & y) | (x & z) | (y & z)]
+        return out
+
+    monkeypatch.setattr(trees, "compress_three", carries_in_place)
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_transform(StereoParams(transform="ext-rank", block=3, lut_inputs=6), 2, seed=2)
+    with pytest.raises(AssertionError, match="outputs differ"):
+        check_matching_cost(StereoParams(transform="ext-census", block=3, lut_inputs=6), 2,
+                            seed=3)
+
+
 # Trees -----------------------------------------------------------------------------------
 
 def check_min_tree(count, width, every, seed, samples=40, split=False):
@@ -388,7 +419,7 @@ def test_broken_absolute_difference_is_caught(monkeypatch):
 
 def test_broken_sum_of_absolute_differences_is_caught(monkeypatch):
     """The increments of the inverted negative differences left out of the sum."""
-    def without_borrows(pairs):
+    def without_borrows(pairs, lut_inputs=4):
         leaves = []
         for a, b in pairs:
             width = max(len(a), len(b))

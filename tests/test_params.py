@@ -22,6 +22,9 @@ BAD = [
     ({"disparities": 16, "width": 16, "height": 8}, "width"),   # width <= first valid column
     ({"disparities": 16, "aggregation": 5, "width": 17, "height": 8}, "width"),
     ({"height": 0, "width": 200}, "height"),
+    ({"lut_inputs": 5}, "lut inputs must be one of 4, 6, not 5"),
+    ({"lut_inputs": "6"}, "lut inputs"),
+    ({"lut_inputs": True}, "lut inputs"),
 ]
 
 
@@ -48,7 +51,7 @@ def test_the_rejection_check_fails_on_a_valid_configuration():
 @pytest.mark.parametrize("changes", [
     {"block": 3, "disparities": 2}, {"disparities": 10, "rounds": 5},
     {"aggregation": 1, "lr_threshold": None}, {"lr_threshold": 0},
-    {"disparities": 16, "width": 17, "height": 1}])
+    {"disparities": 16, "width": 17, "height": 1}, {"lut_inputs": 6}])
 def test_boundary_values_are_accepted(changes):
     params = StereoParams(**changes)
     assert {name: getattr(params, name) for name in changes} == changes

@@ -81,6 +81,7 @@ def test_command_writes_file(tmp_path, capsys):
     (["--aggregation", "2"], "aggregation"),
     (["--lr-threshold", "-1"], "lr threshold"),
     (["--transform", "sad"], "invalid choice"),
+    (["--lut-inputs", "5"], "--lut-inputs: invalid choice: 5"),
     # Beyond what the hardware is generated for: refused at once, not elaborated.
     (["--width", "100000"], "image width must be <= 8192 for the hardware, not 100000"),
     (["--block", "99"], "block size must be <= 31 for the hardware, not 99"),
