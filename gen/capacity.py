@@ -72,6 +72,12 @@ class Device:
     def logic_resource(self):
         return self.resources[0]
 
+    @property
+    def lut_inputs(self):
+        """The ``lut_inputs`` a core for this device is generated with: 6 for the ALM
+        parts (six-input LUTs), 4 for the ECP5."""
+        return 6 if self.target == "cyclonev" else 4
+
     def capacity(self, name):
         return next(r.capacity for r in self.resources if r.name == name)
 

@@ -177,7 +177,8 @@ def run(args):
                 rounds=tuple(args.rounds), aggregations=tuple(args.aggregation),
                 line_buffers=tuple(args.line_buffer), disparities=args.disparities,
                 width=args.width, height=args.height,
-                lr_threshold=None if args.no_lr_check else args.lr_threshold)
+                lr_threshold=None if args.no_lr_check else args.lr_threshold,
+                lut_inputs=dev.lut_inputs)
     configs, skipped = configurations(grid)
     pair = (synthetic_pair(args.width, args.height, args.disparities, args.seed)
             if args.synthetic else load_middlebury(args.dataset))

@@ -24,7 +24,8 @@ from .capacity import fit_message
 from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
 from .engine import Task, TaskFailure, add_engine_arguments, check_engine_arguments, \
     cluster, run_tasks, task_key
-from .paper_resources import is_default_line_buffer, paper_configurations
+from .paper_resources import is_default_line_buffer, paper_configurations, \
+    sweep_targets
 from .plots import sweep_plots
 from .report_cache import cache_key, design, incomplete, memoised_digest, read_result, \
     seed_cache, source_hash, store_result
@@ -164,7 +165,8 @@ def synthesis_job(params, targets, pnr, freq, timeout, cache, engine,
 
 
 def _order(params):
-    return (params["transform"], params["block"], params.get("line_buffer", "auto"))
+    return (params["transform"], params["block"], params.get("line_buffer", "auto"),
+            params.get("lut_inputs", 4))
 
 
 def _status_line(report):
@@ -192,15 +194,18 @@ def synthesis_tasks(configurations, targets, pnr, freq, timeout, cache, engine,
     cached, tasks = [], []
     for p in sorted(configurations, key=lambda p: (not is_default_line_buffer(p),
                                                    p.transform == "ext-census", p.block,
-                                                   p.stored_rows)):
+                                                   p.stored_rows, p.lut_inputs)):
+        p_targets = sweep_targets(p, targets)
+        if not p_targets:
+            continue
         p_pnr = sweep_pnr(p, pnr)
-        report = lookup(p, targets, p_pnr, freq, cache, device)
+        report = lookup(p, p_targets, p_pnr, freq, cache, device)
         if report is not None:
             cached.append(report)
             continue
-        key = task_key("synthesis", repr(p), list(targets), p_pnr, freq, timeout, engine,
+        key = task_key("synthesis", repr(p), list(p_targets), p_pnr, freq, timeout, engine,
                        device, source_hash())
-        tasks.append(Task(key, synthesis_job, (p, tuple(targets), p_pnr, freq, timeout,
+        tasks.append(Task(key, synthesis_job, (p, p_targets, p_pnr, freq, timeout,
                                       None if cache is None else str(cache), engine, device),
                           p.describe()))
     return cached, tasks
@@ -224,8 +229,8 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progre
     # What the cache already holds of the configurations still to run (a target another
     # sweep measured): in the document until their task finishes, so a sweep stopped early
     # shows every figure there is.
-    partial = {task.key: lookup(task.args[0], targets, sweep_pnr(task.args[0], pnr), freq,
-                                cache, partial=True) for task in tasks}
+    partial = {task.key: lookup(task.args[0], task.args[1], sweep_pnr(task.args[0], pnr),
+                                freq, cache, partial=True) for task in tasks}
 
     def so_far():
         return _in_order(reports + [r for r in partial.values() if r is not None],

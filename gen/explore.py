@@ -61,6 +61,8 @@ class Grid:
     width: int
     height: int
     lr_threshold: int | None = 3
+    #: The device's (:attr:`~.capacity.Device.lut_inputs`), for every configuration.
+    lut_inputs: int = 4
 
     _AXES = (("transforms", "--transform"), ("blocks", "--block"), ("rounds", "--rounds"),
              ("aggregations", "--aggregation"), ("line_buffers", "--line-buffer"))
@@ -70,7 +72,8 @@ def _params(grid, transform, block, rounds, aggregation, line_buffer):
     return StereoParams(transform=transform, block=block, disparities=grid.disparities,
                         rounds=rounds, aggregation=aggregation,
                         lr_threshold=grid.lr_threshold, width=grid.width,
-                        height=grid.height, line_buffer=line_buffer)
+                        height=grid.height, line_buffer=line_buffer,
+                        lut_inputs=grid.lut_inputs)
 
 
 def configurations(grid):
@@ -123,8 +126,10 @@ def scene_digest(left, right, truth):
 
 
 def _golden(params):
-    """What the golden model's result depends on: not the frame size, not the buffer."""
-    return dataclasses.replace(params, width=None, height=None, line_buffer="auto")
+    """What the golden model's result depends on: not the frame size, not the buffer, not
+    the LUTs the arithmetic is arranged for."""
+    return dataclasses.replace(params, width=None, height=None, line_buffer="auto",
+                               lut_inputs=4)
 
 
 def _quality_path(cache, key):

@@ -11,7 +11,7 @@ from ..params import TRANSFORMS, StereoParams
 
 __all__ = ["PAPER_BLOCKS", "PAPER_LOGIC", "PAPER_DID_NOT_FIT", "PAPER_MEMORY", "PAPER_CLOCK",
            "PAPER_SIZE", "PAPER_DISPARITIES", "PAPER_ROUNDS", "paper_configurations",
-           "is_default_line_buffer"]
+           "is_default_line_buffer", "SAD_TRANSFORMS", "sweep_targets"]
 
 #: Block sizes of the paper's figures 13 and 14.
 PAPER_BLOCKS = (7, 9, 11, 13, 15, 17, 19)
@@ -35,13 +35,29 @@ PAPER_SIZE = (450, 375)
 PAPER_DISPARITIES, PAPER_ROUNDS = 100, 10
 
 
+#: Transforms with sums of absolute differences (the ext. rank transform, the ext. census
+#: cost), whose arithmetic ``lut_inputs`` arranges: the sweep has them for both LUT sizes.
+SAD_TRANSFORMS = ("ext-rank", "ext-census")
+
+
 def paper_configurations(line_buffers=("transforms", "costs", "pixels")):
     """The paper's sweep, one configuration per transform, block and line buffer (the
-    hardware's three ways to keep the rows above: a user trades block RAM for logic)."""
+    hardware's three ways to keep the rows above: a user trades block RAM for logic), and
+    for :data:`SAD_TRANSFORMS` each of those again arranged for 6-input LUTs (measured on
+    Cyclone V only, :func:`sweep_targets`)."""
     width, height = PAPER_SIZE
     return [StereoParams(transform=t, block=b, disparities=PAPER_DISPARITIES,
-                         rounds=PAPER_ROUNDS, width=width, height=height, line_buffer=lb)
-            for b in PAPER_BLOCKS for t in TRANSFORMS for lb in line_buffers]
+                         rounds=PAPER_ROUNDS, width=width, height=height, line_buffer=lb,
+                         lut_inputs=lut)
+            for b in PAPER_BLOCKS for t in TRANSFORMS for lut in (4, 6) for lb in line_buffers
+            if lut == 4 or t in SAD_TRANSFORMS]
+
+
+def sweep_targets(params, targets):
+    """The targets of ``targets`` the sweep measures ``params`` on: a core arranged for
+    6-input LUTs is not measured on the ECP5, whose LUTs have 4 (it would be larger there
+    than the one arranged for them)."""
+    return tuple(t for t in targets if not (t == "ecp5" and params.lut_inputs == 6))
 
 
 def is_default_line_buffer(params):

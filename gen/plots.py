@@ -98,22 +98,27 @@ def sweep_plots(reports, out):
               ("memory", "cyclonev", "memory_bits", PAPER_MEMORY, "memory bits")]
     if any(r["results"].get("ecp5", {}).get("fmax_mhz") for r in reports):
         panels.append(("fmax", "ecp5", "fmax_mhz", None, "clock MHz (ours: ECP5 nextpnr)"))
-    buffers = sorted({r["params"].get("line_buffer", "auto") for r in reports})
+    buffers = sorted({(r["params"].get("line_buffer", "auto"), r["params"].get("lut_inputs", 4))
+                      for r in reports})
     written = []
     for name, target, key, figures, label in panels:
         figure = Figure(figsize=(7.5, 4.8))
         axes = figure.add_subplot()
         for transform in TRANSFORMS:
-            for buffer in buffers:
+            for buffer, lut in buffers:
                 points = [(r["params"]["block"], r["results"][target][key]) for r in reports
                           if r["params"]["transform"] == transform
                           and r["params"].get("line_buffer", "auto") == buffer
+                          and r["params"].get("lut_inputs", 4) == lut
                           and r["results"].get(target, {}).get("status") == "ok"
                           and r["results"][target].get(key) is not None]
                 if points:
                     rows = "" if buffer == "auto" else f", rows above as {buffer}"
+                    # Arranged for 6-input LUTs: the same line, hollow markers.
+                    six = {"markerfacecolor": "none"} if lut == 6 else {}
                     axes.plot(*zip(*points), styles[buffer], color=colours[transform],
-                              label=f"{transform}{rows}")
+                              label=f"{transform}{rows}" + (", 6-input LUTs" if six else ""),
+                              **six)
             if figures is not None:
                 values = [(b, v) for b, v in zip(PAPER_BLOCKS, figures[transform])
                           if v is not None]

@@ -88,8 +88,14 @@ def _clock(result):
 
 
 def _name(p):
+    variants = [p["line_buffer"]] if p.get("line_buffer", "auto") != "auto" else []
+    variants += [_LUT6] if p.get("lut_inputs", 4) == 6 else []
     return f"{p['transform']} {p['block']}x{p['block']}" + (
-        f" ({p['line_buffer']})" if p.get("line_buffer", "auto") != "auto" else "")
+        f" ({', '.join(variants)})" if variants else "")
+
+
+#: Said of a core whose sums of absolute differences are arranged for 6-input LUTs.
+_LUT6 = "6-input LUTs"
 
 
 def sweep_markdown(reports):
@@ -114,12 +120,16 @@ def sweep_markdown(reports):
         rows = p.get("line_buffer", "auto")
         if rows != "auto" and is_default_line_buffer(StereoParams(**p)):
             rows += " (default)"
+        if p.get("lut_inputs", 4) == 6:
+            rows += f", {_LUT6}"
         lines.append("| " + " | ".join([
             p["transform"], f"{p['block']}x{p['block']}", rows, _cell(cv, "logic"),
             _cell(cv, "lut_rams"), paper_logic,
             _ratio(cv["logic"], logic) if ok else "-", _cell(cv, "registers"),
             _cell(cv, "block_rams"), _cell(cv, "memory_bits"), f"{memory:,}",
             _ratio(cv["memory_bits"], memory) if ok else "-", _levels(cv)]) + " |")
+        if e5 is None and p.get("lut_inputs", 4) == 6:
+            continue    # not for the ECP5's 4-input LUTs (paper_resources.sweep_targets)
         fmax, fps = _clock(e5)
         lut = e5.get("utilisation", {}) or {} if e5 else {}
         clock.append("| " + " | ".join([

@@ -48,8 +48,10 @@ QUALITY_FIGURES = ("correct", "density", "error_rate", "evaluated")
 
 
 def _grid_params():
+    # The Cyclone V's six-input LUTs (rank and census have no sums of differences to
+    # arrange: the same netlists as with four).
     return [StereoParams(transform=t, block=3, disparities=DISPARITIES, rounds=2,
-                         width=WIDTH, height=HEIGHT) for t in ("rank", "census")]
+                         width=WIDTH, height=HEIGHT, lut_inputs=6) for t in ("rank", "census")]
 
 
 def _figures(document):
@@ -286,6 +288,13 @@ def test_grid_order_and_aggregation_values_pass_through():
         configurations(Grid(("census",), (3,), (8,), (3, "sgm"), ("auto",), 8, 32, 8))
 
 
+def test_cores_are_arranged_for_the_devices_luts():
+    assert {name: d.lut_inputs for name, d in DEVICES.items()} == {
+        "ecp5-85k": 4, "ecp5-45k": 4, "ecp5-25k": 4, "cyclonev-a9": 6, "ep2s180": 6}
+    grid = Grid(("ext-census",), (3,), (2,), (3,), ("auto",), 8, 32, 8, lut_inputs=6)
+    assert [p.lut_inputs for p in configurations(grid)[0]] == [6]
+
+
 def _point(logic, correct, fits=True, fps=50.0, memory=100):
     return {"logic": logic, "quality": {"clean": {"correct": correct}}, "fits": fits,
             "frames_per_second": fps, "memory_bits": memory, "label": f"{logic}/{correct}"}
@@ -322,7 +331,7 @@ def test_ecp5_synthesis_is_shared_by_every_part_and_with_report(tmp_path):
     explorer synthesised for the 25k is cached as ``npstereo report --target ecp5`` would
     have it (checked against the 85k) and serves every part; with ``--pnr`` each part is
     placed on its own."""
-    params = _grid_params()[0]
+    params = _grid_params()[0].replace(lut_inputs=DEVICES["ecp5-25k"].lut_inputs)
     cache = tmp_path / "cache"
     first = plan_tasks([params], {}, DEVICES["ecp5-25k"], False, 150.0, None, cache, None)
     [task] = first.tasks

@@ -19,7 +19,7 @@ from PIL import Image
 
 from npstereo.gen import cmd_report, engine, report_cache
 from npstereo.gen.cli import main
-from npstereo.gen.paper_resources import paper_configurations
+from npstereo.gen.paper_resources import paper_configurations, sweep_targets
 from npstereo.gen.plots import sweep_plots
 from npstereo.gen.report_tables import sweep_markdown
 from npstereo.gen.synth import synthesise, tool_versions
@@ -197,18 +197,35 @@ def test_failed_cell_keeps_the_sweep_going(monkeypatch):
 
 def test_paper_sweep_configurations():
     configurations = paper_configurations()
-    # 4 transforms x 7 blocks, each with the rows above kept as transforms, costs, pixels.
-    assert len(configurations) == 84
+    # 4 transforms x 7 blocks, each with the rows above kept as transforms, costs, pixels;
+    # the two with sums of absolute differences also arranged for 6-input LUTs.
+    assert len(configurations) == 84 + 42
     assert {(p.width, p.height, p.disparities, p.rounds) for p in configurations} == {
         (450, 375, 100, 10)}
     assert {p.stored_rows for p in configurations} == {"transforms", "costs", "pixels"}
+    six = [p for p in configurations if p.lut_inputs == 6]
+    assert {p.transform for p in six} == {"ext-rank", "ext-census"} and len(six) == 42
     # One of the three per transform and block is the default, and only it is placed and
-    # routed by the sweep.
+    # routed by the sweep: on the ECP5, where only the 4-input arrangement is measured.
     defaults = [p for p in configurations if cmd_report.sweep_pnr(p, True)]
-    assert len(defaults) == 28 and not any(cmd_report.sweep_pnr(p, False) for p in defaults)
+    assert len(defaults) == 28 + 14
+    assert not any(cmd_report.sweep_pnr(p, False) for p in defaults)
     assert {(p.transform, p.stored_rows) for p in defaults} == {
         ("rank", "transforms"), ("ext-rank", "transforms"), ("census", "pixels"),
         ("ext-census", "costs")}
+    assert [sweep_targets(p, ("cyclonev", "ecp5")) for p in six[:1]] == [("cyclonev",)]
+    assert sweep_targets(defaults[0], ("cyclonev", "ecp5")) == ("cyclonev", "ecp5")
+    assert all(sweep_targets(p, ("ecp5",)) == () for p in six)
+
+
+def test_sweep_tasks_leave_six_input_cores_off_the_ecp5():
+    six = [p for p in paper_configurations() if p.lut_inputs == 6 and p.block == 7
+           and p.transform == "ext-rank"]
+    cached, tasks = cmd_report.synthesis_tasks(six, ("cyclonev", "ecp5"), True, 150.0, None,
+                                               None, None)
+    assert cached == [] and [task.args[1] for task in tasks] == [("cyclonev",)] * 3
+    assert cmd_report.synthesis_tasks(six, ("ecp5",), True, 150.0, None, None, None) == (
+        [], [])
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -274,6 +291,8 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
                                     "clock after 100 iterations")}},
                {"params": {"transform": "census", "block": 7, "line_buffer": "costs"},
                 "results": {"cyclonev": ok, "ecp5": dict(placed, pnr=False, fmax_mhz=None)}},
+               {"params": {"transform": "ext-rank", "block": 7, "line_buffer": "transforms",
+                           "lut_inputs": 6}, "results": {"cyclonev": dict(ok, logic=7000)}},
                {"params": {"transform": "census", "block": 13, "line_buffer": "pixels"},
                 "results": {"cyclonev": ok, "ecp5": dict(
                     placed, status="failed", fmax_mhz=None, frames_per_second=None,
@@ -294,6 +313,10 @@ def test_sweep_outputs_ratios_and_plots(tmp_path):
     assert ("- census 7x7 (pixels): a -> b: 6.1 ns, 4 logic levels (timing-driven rip-up "
             "abandoned: 6,860 arcs missed the clock after 100 iterations)") in text
     assert "- rank 7x7 (transforms): a -> b: 6.1 ns, 4 logic levels\n" in text
+    # Arranged for 6-input LUTs: a Cyclone V row of its own, no ECP5 row.
+    assert ("| ext-rank | 7x7 | transforms (default), 6-input LUTs | 7,000 | 40 | 17,624 | "
+            "0.40 |") in text
+    assert text.count("| ext-rank | 7x7 |") == 1
     written = sweep_plots(reports, tmp_path)
     assert [p.name for p in written] == ["logic.png", "memory.png", "fmax.png"]
     assert all(Image.open(p).size[0] > 100 for p in written)
