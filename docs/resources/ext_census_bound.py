@@ -13,7 +13,8 @@ or computed again (k absolute differences per unit and row). With the memory at 
 paper's, and nothing else in the memory but the B - 1 rows of pixels every window needs,
 this finds the fewest sums of differences per clock, and counts their logic at what one
 sum costs in this flow (Yosys ``synth_intel_alm``, the flow the bar is measured with; the
-cheapest of the two leaf forms and register spacings below, synthesised here). Everything
+cheapest of the cost units' sum arranged for 4- and for 6-input LUTs, a third leaf form and
+two register spacings, synthesised here). Everything
 else in a core (transforms, aggregation, minimum trees, control) counts as nothing, so the
 real core is larger still.
 
@@ -29,6 +30,7 @@ from npstereo.gen.paper_resources import (PAPER_BLOCKS, PAPER_DISPARITIES, PAPER
                                           PAPER_MEMORY, PAPER_ROUNDS, PAPER_SIZE)
 from npstereo.gen.synth import synthesise
 from npstereo.hdl.trees import build_sad, build_sum, register_plan, sad_plan
+from npstereo.params import LUT_INPUTS
 
 W = PAPER_SIZE[0]
 D, R, A = PAPER_DISPARITIES, PAPER_ROUNDS, 3
@@ -38,7 +40,8 @@ DEVICE_ALUTS = DEVICES["ep2s180"].capacity("ALUT")
 
 
 class _Sum(Elaboratable):
-    """sum |a_n - b_n| over k byte pairs between registers, as the cost units build it."""
+    """sum |a_n - b_n| over k byte pairs between registers, as the cost units build it
+    (``leaf_form`` their ``lut_inputs``), or as 2 sum max(a, b) - sum a - sum b."""
 
     def __init__(self, k, leaf_form, every):
         self.k, self.leaf_form, self.every = k, leaf_form, every
@@ -50,8 +53,10 @@ class _Sum(Elaboratable):
         a, b = Signal(8 * self.k), Signal(8 * self.k)
         m.d.sync += [a.eq(self.a), b.eq(self.b)]
         pairs = [(a.word_select(n, 8), b.word_select(n, 8)) for n in range(self.k)]
-        if self.leaf_form == "inverted":    # the cost units' own sum
-            total = build_sad(m, self.en, pairs, sad_plan(self.k, self.every))
+        if self.leaf_form in LUT_INPUTS:    # the cost units' own sum, either arrangement
+            total = build_sad(m, self.en, pairs,
+                              sad_plan(self.k, self.every, lut_inputs=self.leaf_form),
+                              self.leaf_form)
         else:
             # 2 sum max(a, b) - sum a - sum b: the two sums are one per pixel, not counted.
             leaves = [Mux(x < y, y, x) for x, y in pairs]
@@ -62,7 +67,7 @@ class _Sum(Elaboratable):
 
 def sum_aluts(k):
     counts = []
-    for form in ("inverted", "max"):
+    for form in (*LUT_INPUTS, "max"):
         for every in (2, 3):
             top = _Sum(k, form, every)
             text = verilog.convert(top, ports=[top.a, top.b, top.en, top.sum], name="top")
