@@ -27,8 +27,8 @@ from .engine import Task, TaskFailure, add_engine_arguments, check_engine_argume
 from .paper_resources import is_default_line_buffer, paper_configurations, \
     sweep_targets
 from .plots import sweep_plots
-from .report_cache import cache_key, design, incomplete, memoised_digest, read_result, \
-    seed_cache, source_hash, store_result
+from .report_cache import cache_key, design, earlier_reports, incomplete, memoised_digest, \
+    read_result, seed_cache, source_hash, store_result
 from .report_tables import format_table, sweep_markdown
 from .synth import ENGINES, TARGETS, synthesise, tool_versions
 
@@ -212,14 +212,16 @@ def synthesis_tasks(configurations, targets, pnr, freq, timeout, cache, engine,
 
 
 def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progress=None,
-              engine=None):
+              engine=None, earlier=None):
     """Evaluate configurations as tasks on ``client``'s Dask cluster, with a progress bar
     on stderr and a line per finished configuration.
 
     What the cache holds is not submitted. ``progress(reports)`` is called with the
     reports so far before the first task and after each configuration, so a long sweep
     leaves its partial results behind; a configuration still to run is among them with the
-    targets the cache holds of it (the others absent), if any.
+    targets the cache holds of it, and for the others what ``earlier`` (reports of an
+    earlier sweep document that still hold, by ``repr`` of their configuration) recorded
+    (a timeout is not cached), marked ``earlier``; absent where neither has it.
     """
     reports, tasks = synthesis_tasks(configurations, targets, pnr, freq, timeout, cache,
                                      engine)
@@ -229,8 +231,9 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progre
     # What the cache already holds of the configurations still to run (a target another
     # sweep measured): in the document until their task finishes, so a sweep stopped early
     # shows every figure there is.
-    partial = {task.key: lookup(task.args[0], task.args[1], sweep_pnr(task.args[0], pnr),
-                                freq, cache, partial=True) for task in tasks}
+    partial = {task.key: _still_to_run(task.args[0], task.args[1], pnr, freq, cache,
+                                       (earlier or {}).get(repr(task.args[0])))
+               for task in tasks}
 
     def so_far():
         return _in_order(reports + [r for r in partial.values() if r is not None],
@@ -250,6 +253,18 @@ def run_sweep(configurations, targets, pnr, freq, timeout, cache, client, progre
         progress(so_far())
     run_tasks(client, tasks, "synthesis", on_result=finished)
     return _in_order(reports, configurations)
+
+
+def _still_to_run(params, targets, pnr, freq, cache, before):
+    """The document's report of a configuration whose task has not finished: what the
+    cache holds of it, the rest from the earlier document's report ``before``."""
+    report = lookup(params, targets, sweep_pnr(params, pnr), freq, cache, partial=True)
+    if before is None:
+        return report
+    results = {t: dict(before["results"][t], earlier=True) for t in targets
+               if t in before["results"]}
+    results.update({} if report is None else report["results"])
+    return dict(report or before, results=results) if results else None
 
 
 def _in_order(reports, configurations):
@@ -325,11 +340,14 @@ def run(args):
     cache = None if args.no_cache else args.cache
     if args.paper:
         configurations = paper_configurations()
+        earlier = {}
         if cache is not None:
             seeded = seed_cache(args.out / "sweep.json", cache)
             if seeded:
                 print(f"resuming: {seeded} results taken from {args.out / 'sweep.json'}",
                       file=sys.stderr)
+            earlier = {repr(p): report for p, _, report
+                       in earlier_reports(args.out / "sweep.json", cache)}
     else:
         if args.width is None or args.height is None:
             raise UserError("--width and --height are required (or use --paper)")
@@ -339,7 +357,8 @@ def run(args):
         with cluster(args.scheduler, args.workers) as client:
             reports = run_sweep(configurations, targets, args.pnr, args.freq, args.timeout,
                                 cache, client, engine=args.yosys,
-                                progress=lambda done: _write_sweep(done, args.out))
+                                progress=lambda done: _write_sweep(done, args.out),
+                                earlier=earlier)
     else:
         reports = [synthesis_job(configurations[0], targets, args.pnr, args.freq,
                                  args.timeout, cache, args.yosys)]

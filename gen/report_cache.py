@@ -18,8 +18,8 @@ from .atomic import write_text
 from .synth import tool_versions
 
 __all__ = ["source_hash", "golden_source_hash", "verilog_digest", "configuration_digest",
-           "design", "memoised_digest", "cache_key", "seed_cache", "read_result",
-           "store_result", "incomplete"]
+           "design", "memoised_digest", "cache_key", "seed_cache", "earlier_reports",
+           "read_result", "store_result", "incomplete"]
 
 _PACKAGE = Path(__file__).resolve().parent.parent
 #: What the generated Verilog is made from: the HDL and the parameter object.
@@ -137,28 +137,37 @@ def incomplete(result):
         "carry_chains" not in result
 
 
+def earlier_reports(sweep_json, cache):
+    """The reports of an earlier sweep document that hold for the current tools and HDL:
+    same tool versions and the same generated Verilog (``verilog_sha`` of the report; a
+    document without it must come from the current HDL sources). A list of
+    ``(params, digest, report)``; empty when there is no such document."""
+    try:
+        document = json.loads(Path(sweep_json).read_text())
+    except (OSError, ValueError):
+        return []
+    if document.get("tools") != tool_versions():
+        return []
+    same_sources = document.get("hdl_sources") == source_hash()
+    holding = []
+    for report in document.get("reports", []):
+        params = StereoParams(**report["params"])
+        digest = configuration_digest(params, cache)
+        if report.get("verilog_sha", digest if same_sources else None) == digest:
+            holding.append((params, digest, report))
+    return holding
+
+
 def seed_cache(sweep_json, cache):
     """Put the results of an earlier sweep document into the cache; returns how many.
 
     A sweep is committed with the repository (docs/resources/sweep.json) but the cache
     lives on one machine: this lets a fresh machine resume the sweep instead of
-    synthesising for hours what the document already holds. A result is taken only for
-    the same tool versions and the same generated Verilog (``verilog_sha`` of its report;
-    a document without it must come from the current HDL sources).
+    synthesising for hours what the document already holds. Only what
+    :func:`earlier_reports` finds still holds is taken.
     """
-    try:
-        document = json.loads(Path(sweep_json).read_text())
-    except (OSError, ValueError):
-        return 0
-    if document.get("tools") != tool_versions():
-        return 0
-    same_sources = document.get("hdl_sources") == source_hash()
     seeded = 0
-    for report in document.get("reports", []):
-        params = StereoParams(**report["params"])
-        digest = configuration_digest(params, cache)
-        if report.get("verilog_sha", digest if same_sources else None) != digest:
-            continue
+    for params, digest, report in earlier_reports(sweep_json, cache):
         for target, result in report["results"].items():
             # "does not fit" is an answer like "ok": without it a fresh machine would
             # synthesise the largest cores again for an hour to learn what it says.

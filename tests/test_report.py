@@ -412,6 +412,32 @@ def test_sweep_document_shows_what_the_cache_holds_of_unfinished_cells(tmp_path)
     text = sweep_markdown([dict(report, params=dict(report["params"], block=7))])
     assert "| 321 |" in text and "| not run | - | 100 |" in text
 
+    # An earlier sweep document that still holds: the ECP5 result it recorded (a timeout,
+    # which the cache never holds) stands in the document until the task has run; the
+    # cache's result stands over the document's.
+    document = {"tools": tool_versions(), "hdl_sources": report_cache.source_hash(),
+                "reports": [{"params": dataclasses.asdict(params), "verilog_sha": digest,
+                             "results": {"cyclonev": dict(measured, logic=1),
+                                         "ecp5": {"target": "ecp5", "status": "timeout",
+                                                  "message": "killed after 3600 s"}}}]}
+    sweep = tmp_path / "sweep.json"
+    sweep.write_text(json.dumps(document))
+    earlier = {repr(p): r for p, _, r in report_cache.earlier_reports(sweep, cache)}
+    assert list(earlier) == [repr(params)]
+    written.clear()
+    with pytest.raises(Stop):
+        cmd_report.run_sweep([params], ("cyclonev", "ecp5"), True, 150.0, None, cache,
+                             client=None, progress=progress, earlier=earlier)
+    [[report]] = written
+    assert report["results"]["cyclonev"]["logic"] == 321
+    assert report["results"]["ecp5"] == {"target": "ecp5", "status": "timeout",
+                                         "message": "killed after 3600 s", "earlier": True}
+    text = sweep_markdown([dict(report, params=dict(report["params"], block=7))])
+    assert "| timeout | - | 100 |" in text
+    document["reports"][0]["verilog_sha"] = "0" * 24                 # another design
+    sweep.write_text(json.dumps(document))
+    assert report_cache.earlier_reports(sweep, cache) == []
+
 
 #: Figures of a synthesis result that must not depend on where it ran.
 FIGURES = ("status", "logic", "registers", "block_rams", "lut_rams", "memory_bits",
