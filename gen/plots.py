@@ -98,8 +98,8 @@ def sweep_plots(reports, out):
               ("memory", "cyclonev", "memory_bits", PAPER_MEMORY, "memory bits")]
     if any(r["results"].get("ecp5", {}).get("fmax_mhz") for r in reports):
         panels.append(("fmax", "ecp5", "fmax_mhz", None, "clock MHz (ours: ECP5 nextpnr)"))
-    buffers = sorted({(r["params"].get("line_buffer", "auto"), r["params"].get("lut_inputs", 4))
-                      for r in reports})
+    buffers = sorted({(r["params"].get("line_buffer", "auto"),
+                       r["params"].get("lut_inputs", 4)) for r in reports})
     written = []
     for name, target, key, figures, label in panels:
         figure = Figure(figsize=(7.5, 4.8))

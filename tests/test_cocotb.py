@@ -59,6 +59,9 @@ CONFIGS = {
     "ext-rank-3-D4-R1-nolr": (config("ext-rank", 3, 4, 1, None), TRAFFIC_PLAN),
     "rank-7-D8-R4-lr0": (config("rank", 7, 8, 4, 0), TRAFFIC_PLAN),
     "ext-census-3-D6-R3-lr2": (config("ext-census", 3, 6, 3, 2), TRAFFIC_PLAN),
+    # Sums of absolute differences arranged for 6-input LUTs (compressors as gates).
+    "ext-census-5-D8-R2-lr1-lut6": (config("ext-census", 5, 8, 2, 1).replace(lut_inputs=6),
+                                    TRAFFIC_PLAN),
     "census-3-D8-R8-sgm": (config("census", 3, 8, 8, 1).replace(
         aggregation="sgm", p1=3, p2=20, p2_adapt=2), FULL_PLAN),
 }
