@@ -102,7 +102,7 @@ def sweep_plots(reports, out):
                        r["params"].get("lut_inputs", 4)) for r in reports})
     written = []
     for name, target, key, figures, label in panels:
-        figure = Figure(figsize=(7.5, 4.8))
+        figure = Figure(figsize=(7.5, 6.8))
         axes = figure.add_subplot()
         for transform in TRANSFORMS:
             for buffer, lut in buffers:
@@ -133,12 +133,13 @@ def sweep_plots(reports, out):
         axes.set_ylabel(label)
         axes.set_xticks(PAPER_BLOCKS)
         axes.grid(alpha=0.3)
-        axes.legend(fontsize=7, ncol=2)
+        # Below the axes: with both LUT arrangements the lines fill the plot.
+        axes.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.12))
         axes.set_title(f"{label}, 450x375, D=100, R=10")
         figure.tight_layout()
         target_path = Path(out) / f"{name}.png"
         with atomic_path(target_path) as tmp:
-            figure.savefig(tmp, dpi=110)
+            figure.savefig(tmp, dpi=110, bbox_inches="tight")
         written.append(target_path)
     return written
 
