@@ -28,6 +28,8 @@ QUICK = [
                  aggregation=1, width=24, height=8),
     StereoParams(transform="census", block=5, disparities=24, rounds=8, aggregation="sgm",
                  width=28, height=8),
+    StereoParams(transform="ext-census", block=5, disparities=16, rounds=4, width=24,
+                 height=8, lut_inputs=6),
 ]
 
 
@@ -44,7 +46,8 @@ def test_header_records_parameters():
     text = core_verilog(params)
     head = text[:text.index("module")]
     for fragment in ("transform=rank", "block=5", "disparities=16", "rounds=4",
-                     "aggregation=3", "lr_threshold=off", "width=24", "height=8", "Amaranth"):
+                     "aggregation=3", "lr_threshold=off", "width=24", "height=8",
+                     "lut_inputs=4", "Amaranth"):
         assert fragment in head
     assert f"module {TOP_NAME}(" in text
     for port in ("s_axis_tdata", "s_axis_tvalid", "s_axis_tready", "s_axis_tuser",
