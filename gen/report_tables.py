@@ -2,7 +2,7 @@
 
 from ..params import StereoParams
 from .paper_resources import PAPER_BLOCKS, PAPER_CLOCK, PAPER_DID_NOT_FIT, PAPER_LOGIC, \
-    PAPER_MEMORY, is_default_line_buffer
+    PAPER_MEMORY, SAD_TRANSFORMS, is_default_line_buffer
 
 __all__ = ["format_table", "sweep_markdown"]
 
@@ -41,6 +41,7 @@ def format_table(report):
     widths = [max(len(row[i]) for row in rows if i < len(row)) for i in range(len(header))]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
     notes = [f"cycles per frame {report['cycles_per_frame']:,} (frames back to back)"]
+    notes += _lut_notes(report)
     notes += [f"{t}: {r['message']}" for t, r in report["results"].items()
               if r.get("message") and _synthesised(r) and r["status"] != "does not fit"]
     for t, r in report["results"].items():
@@ -51,6 +52,23 @@ def format_table(report):
     notes += [f"{t} critical path: {r['critical_path']}{_router_note(r)}"
               for t, r in report["results"].items() if r.get("critical_path")]
     return "\n".join(lines + notes)
+
+
+#: The LUT inputs of each target's fabric (what ``lut_inputs`` should say for it).
+_TARGET_LUT_INPUTS = {"cyclonev": 6, "ecp5": 4}
+
+
+def _lut_notes(report):
+    """A note per target whose fabric's LUTs the core's sums of absolute differences are
+    not arranged for (only ext. rank and ext. census have such sums)."""
+    p = report["params"]
+    if p["transform"] not in SAD_TRANSFORMS:
+        return []
+    lut = p.get("lut_inputs", 4)
+    return [f"{t}: sums of absolute differences arranged for {lut}-input LUTs; this "
+            f"fabric's have {_TARGET_LUT_INPUTS[t]}: --lut-inputs {_TARGET_LUT_INPUTS[t]} "
+            f"is smaller here"
+            for t in report["results"] if _TARGET_LUT_INPUTS.get(t, lut) != lut]
 
 
 def _cell(result, key, digits=0):

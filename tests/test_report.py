@@ -21,7 +21,7 @@ from npstereo.gen import cmd_report, engine, report_cache
 from npstereo.gen.cli import main
 from npstereo.gen.paper_resources import paper_configurations, sweep_targets
 from npstereo.gen.plots import sweep_plots
-from npstereo.gen.report_tables import sweep_markdown
+from npstereo.gen.report_tables import format_table, sweep_markdown
 from npstereo.gen.synth import synthesise, tool_versions
 from npstereo.hdl import plan
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
@@ -246,6 +246,24 @@ def test_bad_input_exits_2_with_one_line(argv, message, capsys, tmp_path):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert not json_path.exists()
+
+
+def test_table_says_when_the_lut_arrangement_does_not_suit_the_target():
+    ok = {"target": "cyclonev", "status": "ok", "logic": 10, "logic_unit": "ALUT",
+          "registers": 1, "block_rams": 0, "block_ram_kind": "M10K", "lut_rams": 0,
+          "memory_bits": 0, "ffram_bits": 0, "fmax_mhz": None, "seconds": 1.0,
+          "message": ""}
+
+    def table(transform, lut):
+        return format_table({"params": {"transform": transform, "lut_inputs": lut},
+                             "cycles_per_frame": 1,
+                             "results": {"cyclonev": ok, "ecp5": dict(ok, target="ecp5")}})
+    assert "cyclonev: sums of absolute differences arranged for 4-input LUTs; this " \
+           "fabric's have 6: --lut-inputs 6 is smaller here" in table("ext-census", 4)
+    assert "ecp5:" not in table("ext-census", 4)
+    assert "ecp5: sums of absolute differences arranged for 6-input LUTs" in \
+           table("ext-rank", 6) and "cyclonev: sums" not in table("ext-rank", 6)
+    assert "arranged for" not in table("census", 4)    # no such sums
 
 
 def test_json_to_folder_is_refused(capsys, tmp_path):
