@@ -2,7 +2,7 @@
 paper's (issue 10), at the paper's sizes: prints the table of docs/resources.md
 "Ext. census memory".
 
-    .venv/bin/python docs/resources/ext_census_bound.py        # about 2 minutes
+    .venv/bin/python docs/resources/ext_census_bound.py        # several minutes
 
 The box sum of row y needs the costs of rows y - 1, y and y + 1 at every (column,
 disparity). A cost of an earlier row is either kept (at least cost_bits - 1 bits per
@@ -20,7 +20,19 @@ real core is larger still.
 
 The floor column needs no synthesis: 8 ALUTs per 8-bit difference (one per result bit)
 and half an ALUT per bit a three-input adder tree removes, per sum and per transform.
+
+A second table estimates a core outside that bound, not built: a strip of n rows worked in
+tiles of T columns, row by row within a tile (docs/resources.md, "Outside the bound").
+Its sums per clock are D/R (n+2)(T+2)/(n T); its memory the pixel rows of the strip and of
+the next one arriving, the right transforms of D + T + 1 columns twice (the row worked on
+and the next), partial sums of two rows of the tile and n rows of results; the rest of the
+core is counted as in the measured ``costs`` core with 6-input LUTs (its ALUTs in
+docs/resources/sweep.json less its D/R sums), the schedule's own control as nothing.
 """
+
+import json
+from functools import cache
+from pathlib import Path
 
 from amaranth.back import verilog
 from amaranth.hdl import Elaboratable, Module, Mux, Signal
@@ -65,6 +77,7 @@ class _Sum(Elaboratable):
         return m
 
 
+@cache
 def sum_aluts(k):
     counts = []
     for form in (*LUT_INPUTS, "max"):
@@ -101,5 +114,50 @@ def main():
               f"{bound:,.0f} | {floor:,.0f} | {bar:,} |", flush=True)
 
 
+def costs_core_aluts(block):
+    """Cyclone V ALUTs of the ext. census ``costs`` core with 6-input LUTs, from the
+    committed sweep; None if it has no such figure."""
+    sweep = json.loads((Path(__file__).parent / "sweep.json").read_text())
+    for report in sweep["reports"]:
+        p, result = report["params"], report["results"].get("cyclonev", {})
+        if (p["transform"], p["block"], p.get("line_buffer"), p.get("lut_inputs")) == (
+                "ext-census", block, "costs", 6) and result.get("status") == "ok":
+            return result["logic"]
+    return None
+
+
+def strip_estimate():
+    print("\n| block | n rows | T columns | sums per clock | memory bits | budget | "
+          "estimate (ALUT) | bar (ALUT) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for i, block in enumerate(PAPER_BLOCKS):
+        k = block * block - 1
+        core = costs_core_aluts(block)
+        if core is None:
+            continue
+        other = core - UNITS * sum_aluts(k)
+        summed_bits = (A * A * 255 * k).bit_length()
+        budget = PAPER_MEMORY["ext-census"][i]
+        best = None
+        for n in range(1, 64):
+            for T in range(1, 256):
+                memory = (2 * (2 * n + block + 1) * W * 8 + 2 * (D + T + 1) * 8 * k
+                          + 2 * (T + 2) * D * summed_bits + n * W * 7)
+                if memory > budget:
+                    continue
+                sums = UNITS * (n + 2) * (T + 2) / (n * T)
+                if best is None or sums < best[0]:
+                    best = (sums, n, T, memory)
+        paper = PAPER_LOGIC["ext-census"][i]
+        bar = DEVICE_ALUTS if paper is None else min(DEVICE_ALUTS, int(0.7 * paper))
+        if best is None:
+            print(f"| {block}x{block} | - | - | - | - | {budget:,} | no fit | {bar:,} |")
+            continue
+        sums, n, T, memory = best
+        print(f"| {block}x{block} | {n} | {T} | {sums:.1f} | {memory:,} | {budget:,} | "
+              f"{sums * sum_aluts(k) + other:,.0f} | {bar:,} |", flush=True)
+
+
 if __name__ == "__main__":
     main()
+    strip_estimate()
