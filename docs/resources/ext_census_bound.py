@@ -1,6 +1,6 @@
 """A lower bound on the logic of an exact ext. census core whose memory is at most the
-paper's (issue 10), at the paper's sizes: prints the table of docs/resources.md
-"Ext. census memory".
+paper's (issue 10), at the paper's sizes, and an estimate of a schedule outside it: prints
+the two tables of docs/resources.md "Ext. census memory".
 
     .venv/bin/python docs/resources/ext_census_bound.py        # several minutes
 
