@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-from ..params import UserError
+from ..params import ParameterError, UserError
 
-__all__ = ["StereoPair", "to_gray", "check_same_size", "read_image", "read_pfm",
+__all__ = ["StereoPair", "to_gray", "check_same_size", "check_gray_pair", "read_image", "read_pfm",
            "load_middlebury", "LAYOUTS"]
 
 
@@ -92,6 +92,17 @@ def check_same_size(left, right, where=""):
     if left.shape[:2] != right.shape[:2]:
         raise UserError(f"left and right images{where} differ in size: {left.shape[1]}x"
                         f"{left.shape[0]} and {right.shape[1]}x{right.shape[0]}")
+
+
+def check_gray_pair(left, right):
+    """Raise a one-line :class:`ParameterError` unless both images are 8-bit gray (2-D
+    uint8), and :func:`check_same_size`'s error unless they have the same size: what the
+    matching pipelines (box and SGM) take."""
+    for name, image in (("left", left), ("right", right)):
+        if image.ndim != 2 or image.dtype != np.uint8:
+            raise ParameterError(
+                f"{name} image must be 8-bit gray (2-D uint8), not {image.dtype} {image.shape}")
+    check_same_size(left, right)
 
 
 def read_image(path, what="image"):

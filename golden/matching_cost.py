@@ -6,7 +6,9 @@ and such pairs only ever reach valid outputs through the right-referenced map's 
 
 import numpy as np
 
-__all__ = ["cost_dtype", "ext_census_totals", "matching_costs"]
+from ..params import check_transform_table
+
+__all__ = ["cost_dtype", "pixel_sums", "matching_costs"]
 
 
 def cost_dtype(params):
@@ -15,40 +17,53 @@ def cost_dtype(params):
     return np.uint16 if bits <= 16 else np.uint32 if bits <= 32 else np.uint64
 
 
-def _rank_cost(left, right, out):
+def _absolute_cost(left, right, out, totals):
     # |a - b| as max - min stays exact in the transform's own unsigned dtype.
     np.subtract(np.maximum(left, right), np.minimum(left, right), out=out, casting="unsafe")
 
 
-def _census_cost(left, right, out):
+def _hamming_cost(left, right, out, totals):
     ones = np.bitwise_count(np.bitwise_xor(left, right))
     # Up to 3 words (192 bits) the count fits uint8: add without widening, widen once.
     total = np.add.reduce(ones, axis=0, dtype=np.uint8 if len(ones) <= 3 else out.dtype)
     np.copyto(out, total)
 
 
-def _ext_census_cost(left, right, out, totals):
+def _byte_sad_cost(left, right, out, totals):
     # sum |u - v| = sum u + sum v - 2 sum min(u, v): one uint8 pass over the k bytes instead
-    # of three (max, min, subtract); the byte sums are computed once, not once per d.
-    # Summing over the last axis is fast when each pixel's k bytes are contiguous, as
-    # transform.ext_census stores them.
+    # of three (max, min, subtract); ``totals`` (sum u + sum v) come from byte sums
+    # computed once, not once per d. Summing over the last axis is fast when each pixel's
+    # k bytes are contiguous, as transform.ext_census stores them.
     smaller = np.minimum(left.transpose(1, 2, 0), right.transpose(1, 2, 0))
     np.add.reduce(smaller, axis=-1, dtype=out.dtype, out=out)
     out *= out.dtype.type(2)
     np.subtract(totals, out, out=out)
 
 
-_COSTS = {"rank": _rank_cost, "ext-rank": _rank_cost, "census": _census_cost}
+def _byte_sums(transformed, dtype):
+    """Sum of each pixel's bytes: (rows, W) of ``dtype``."""
+    return np.add.reduce(transformed, axis=0, dtype=dtype)
 
 
-def ext_census_totals(left_t, right_t, d, dtype):
-    """sum u + sum v of the ext-census pairs at disparity d: (rows, W - d) of ``dtype``."""
-    width = left_t.shape[-1]
-    return (np.add.reduce(left_t[..., d:], axis=0, dtype=dtype)
-            + np.add.reduce(right_t[..., :width - d], axis=0, dtype=dtype))
+#: Per transform: ``cost(left, right, out, totals)``, the costs of aligned pairs of
+#: transformed pixels into ``out``; and the per-pixel sums it needs for ``totals`` (the left
+#: sum plus the right sum of each pair), computed once for all disparities, or None.
+_COSTS = check_transform_table({
+    "rank": (_absolute_cost, None),
+    "census": (_hamming_cost, None),
+    "ext-rank": (_absolute_cost, None),
+    "ext-census": (_byte_sad_cost, _byte_sums),
+}, "golden.matching_cost._COSTS")
 
 
-def matching_costs(left_t, right_t, d, params, out=None, totals=None):
+def pixel_sums(left_t, right_t, params, dtype):
+    """The per-pixel sums the cost of ``params.transform`` reuses for every disparity, as
+    (left, right) of ``dtype``, or None if it needs none (see :func:`matching_costs`)."""
+    summed = _COSTS[params.transform][1]
+    return None if summed is None else (summed(left_t, dtype), summed(right_t, dtype))
+
+
+def matching_costs(left_t, right_t, d, params, out=None, sums=None):
     """Cost of every left pixel against its right partner at disparity d.
 
     Parameters
@@ -61,9 +76,9 @@ def matching_costs(left_t, right_t, d, params, out=None, totals=None):
     params : StereoParams
     out : ndarray, optional
         (rows, W) array of :func:`cost_dtype` to write into (saves an allocation per d).
-    totals : ndarray, optional
-        ext-census only: ``ext_census_totals(left_t, right_t, d, cost_dtype(params))``, when
-        the caller has it cheaper (from per-pixel byte sums computed once per image).
+    sums : tuple, optional
+        ``pixel_sums(left_t, right_t, params, out.dtype)``, when the caller computes the
+        costs of many disparities (saves a pass over the transformed pixels per d).
 
     Returns
     -------
@@ -74,11 +89,11 @@ def matching_costs(left_t, right_t, d, params, out=None, totals=None):
     if out is None:
         out = np.empty(left_t.shape[-2:], dtype=cost_dtype(params))
     out[:, :d] = 0
-    left, right = left_t[..., d:], right_t[..., :width - d]
-    if params.transform == "ext-census":
-        if totals is None:
-            totals = ext_census_totals(left_t, right_t, d, out.dtype)
-        _ext_census_cost(left, right, out[:, d:], totals)
-    else:
-        _COSTS[params.transform](left, right, out[:, d:])
+    cost, summed = _COSTS[params.transform]
+    totals = None
+    if summed is not None:
+        left_sums, right_sums = (sums if sums is not None else
+                                 pixel_sums(left_t, right_t, params, out.dtype))
+        totals = left_sums[:, d:] + right_sums[:, :width - d]
+    cost(left_t[..., d:], right_t[..., :width - d], out[:, d:], totals)
     return out

@@ -18,9 +18,9 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .aggregation import aggregate
-from .data import check_same_size
+from .data import check_gray_pair
 from .lr_check import DisparityResult, invalidate_border, lr_check
-from .matching_cost import cost_dtype, matching_costs
+from .matching_cost import cost_dtype, matching_costs, pixel_sums
 from ..params import ParameterError
 from . import sgm
 from .transform import transform
@@ -67,16 +67,9 @@ def _band_costs(left_t, right_t, params):
     step = _chunk_rows(params, width)
     for y0 in range(0, height, step):
         left, right = left_t[..., y0:y0 + step, :], right_t[..., y0:y0 + step, :]
-        if params.transform == "ext-census":
-            left_sums = np.add.reduce(left, axis=0, dtype=dtype)
-            right_sums = np.add.reduce(right, axis=0, dtype=dtype)
-            totals = np.empty(left_sums.shape, dtype)
+        sums = pixel_sums(left, right, params, dtype)
         for d in range(params.disparities):
-            extra = {}
-            if params.transform == "ext-census":
-                extra["totals"] = np.add(left_sums[:, d:], right_sums[:, :width - d],
-                                         out=totals[:, :width - d])
-            matching_costs(left, right, d, params, out=volume[d, y0:y0 + step], **extra)
+            matching_costs(left, right, d, params, out=volume[d, y0:y0 + step], sums=sums)
     return volume
 
 
@@ -102,14 +95,6 @@ def _match_band(left_t, right_t, params, band, rows):
     return evaluate_partitions(partition_results), right_wta.best_disparity
 
 
-def _check_images(left, right):
-    for name, image in (("left", left), ("right", right)):
-        if image.ndim != 2 or image.dtype != np.uint8:
-            raise ParameterError(
-                f"{name} image must be 8-bit gray (2-D uint8), not {image.dtype} {image.shape}")
-    check_same_size(left, right)
-
-
 def disparity_map(left, right, params, threads=None):
     """Disparity of every left pixel, INVALID (-1) where none is reported.
 
@@ -129,7 +114,7 @@ def disparity_map(left, right, params, threads=None):
     DisparityResult
     """
     left, right = np.asarray(left), np.asarray(right)
-    _check_images(left, right)
+    check_gray_pair(left, right)
     height, width = left.shape
     if params.width is not None and (params.width, params.height) != (width, height):
         raise ParameterError(

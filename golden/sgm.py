@@ -1,13 +1,14 @@
-"""Semi-global aggregation (SGM) along the four raster-order paths, bit-exact integers.
+"""Semi-global aggregation (SGM) along the raster-order paths, bit-exact integers.
 
 An aggregation choice beside the A x A box of :mod:`.aggregation`: the matching costs C of
-any transform are aggregated along the paths a raster-order stream can compute (left,
-top-left, top, top-right) with integer penalties P1, P2 (optionally P2 adapted to the
-intensity step along the path), normalised by the previous pixel's minimum, and summed.
-The summed costs S then go through the same WTA and right-referenced map as the box
-pipeline. docs/semantics.md ("Semi-global aggregation") is the exact contract; every
-function here computes it bit for bit with integer numpy arithmetic (no floats anywhere).
-The rules of the parameters (P1, P2, t) and the widths they imply are defined once, in
+any transform are aggregated along the paths a raster-order stream can compute
+(``params.SGM_PATHS``: left, top-left, top, top-right) with integer penalties P1, P2
+(optionally P2 adapted to the intensity step along the path), normalised by the previous
+pixel's minimum, and summed. The summed costs S then go through the same WTA and
+right-referenced map as the box pipeline. docs/semantics.md ("Semi-global aggregation") is
+the exact contract; every function here computes it bit for bit with integer numpy
+arithmetic (no floats anywhere). The paths, the rules of the parameters (P1, P2, t), the
+recommended configurations and the widths they imply are defined once, in
 :mod:`npstereo.params`, for this model, the command line and the hardware alike;
 ``golden.pipeline.disparity_map`` calls :func:`disparity_map` when
 ``StereoParams.aggregation`` is ``"sgm"``.
@@ -18,129 +19,27 @@ the d - 1 / d + 1 neighbours of the recurrence are contiguous operations.
 
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import (SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2, ParameterError,
-                      StereoParams, max_path_penalty, sgm_path_cost_bits, sgm_summed_cost_bits)
-from ..params import check_penalties as check_penalty_values
+from ..params import (SGM_PATH_COUNT, SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED,
+                      SGM_ROW_PATHS, ParameterError, StereoParams, check_penalties,
+                      check_sgm_paths)
+from .data import check_gray_pair
 from .lr_check import INVALID, DisparityResult, lr_check
-from .matching_cost import matching_costs
+from .matching_cost import cost_dtype, matching_costs, pixel_sums
 from .transform import transform
 
-__all__ = ["PATHS", "PATH_STEPS", "ROW_PATHS", "DEFAULT_TRANSFORM", "DEFAULT_BLOCK",
-           "DEFAULT_P1", "DEFAULT_P2", "DEFAULT_ADAPT", "RECOMMENDED", "SgmWidths",
-           "max_path_penalty",
-           "widths", "row_memory_bits", "check_penalties", "cost_volume",
-           "path_p2", "path_costs", "aggregate", "winners", "disparity_from_summed",
-           "disparity_map"]
+__all__ = ["cost_volume", "path_p2", "path_costs", "aggregate", "winners",
+           "disparity_from_summed", "disparity_map"]
 
-#: The four paths a raster-order stream can compute, in the order they are summed.
-PATHS = ("left", "top-left", "top", "top-right")
-
-#: (dx, dy) from a pixel p to its predecessor p - r on each path.
-PATH_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
-
-#: The recommended configuration, chosen by measurement (docs/quality.md, "SGM: choosing
-#: the defaults"): census 7x7, P1 = 24, P2 = 79, adaptive P2 with t = 5. The path cost is
-#: then bitlen(48 + 79) = 7 bits, what the block-RAM budget allows at 450 x 375, D = 100.
-#: The penalties are ``StereoParams``' defaults for ``aggregation="sgm"`` (npstereo.params).
-DEFAULT_TRANSFORM = "census"
-DEFAULT_BLOCK = 7
-DEFAULT_P1 = SGM_DEFAULT_P1
-DEFAULT_P2 = SGM_DEFAULT_P2
-DEFAULT_ADAPT = SGM_DEFAULT_ADAPT
-
-#: The SGM configurations the paper report, the demo and the peers benchmark show, as
-#: ``StereoParams`` fields (add ``disparities``): the defaults, and census 5x5 with the
-#: penalties best on clean real scenes, the cheapest core (docs/quality.md).
-RECOMMENDED = ({"transform": DEFAULT_TRANSFORM, "block": DEFAULT_BLOCK, "aggregation": "sgm"},
-               {"transform": "census", "block": 5, "aggregation": "sgm", "p1": 16, "p2": 96,
-                "p2_adapt": 4})
-
-#: Paths whose predecessor lies in the previous row: their path costs of a whole row are
-#: kept in block RAM.
-ROW_PATHS = ("top-left", "top", "top-right")
+# issue 26: gen/ still imports this; removed once gen is rewired
+RECOMMENDED = SGM_RECOMMENDED
 
 #: Elements of one band's cost volume in :func:`disparity_map` (rows x W x D): 4 Mi, a few
 #: MiB per band volume, so that memory stays bounded for any frame size while the left
 #: path's loop over x still handles many rows per numpy call.
 _BAND_ELEMENTS = 1 << 22
-
-
-@dataclass(frozen=True)
-class SgmWidths:
-    """Exact bit widths of every quantity of the SGM aggregation (docs/semantics.md,
-    "Widths").
-
-    Attributes
-    ----------
-    cost : int
-        C(p, d): bitlen(Cmax).
-    path : int
-        L_r(p, d) and its minimum m_r(p): bitlen(Cmax + P2).
-    step : int
-        The normalised transition term min(...) - m_r(p - r) in 0 .. P2: bitlen(P2).
-    candidate : int
-        The largest candidate inside the min before normalisation, m + P2 <= Cmax + 2 P2:
-        bitlen(Cmax + 2 P2). Hardware that subtracts m first needs only
-        bitlen(Cmax + P2 + P1) for L - m + P1.
-    summed : int
-        S(p, d) = sum over the N paths: bitlen(N (Cmax + P2)).
-    """
-
-    cost: int
-    path: int
-    step: int
-    candidate: int
-    summed: int
-
-
-def check_penalties(max_cost, p1, p2, adapt=None, paths=PATHS):
-    """Validate SGM parameters; raise :class:`ParameterError` with a one-line message.
-
-    The penalties' rules are :func:`npstereo.params.check_penalties` (one definition for
-    ``StereoParams`` and this model); the path set is this model's own.
-
-    Parameters
-    ----------
-    max_cost : int
-        Cmax, the largest matching cost of the transform (``StereoParams.max_cost``).
-    p1, p2 : int
-        Penalties: 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax).
-    adapt : int or None
-        Adaptive-P2 threshold exponent t, 1 <= t <= 7, or None for a constant P2.
-    paths : sequence of str
-        A non-empty subset of :data:`PATHS`, each at most once.
-    """
-    check_penalty_values(max_cost, p1, p2, adapt)
-    paths = tuple(paths)
-    if not paths or len(set(paths)) != len(paths) or any(p not in PATH_STEPS for p in paths):
-        raise ParameterError(
-            f"SGM paths must be distinct names among {', '.join(PATHS)}, not {paths!r}")
-
-
-def widths(max_cost, p1, p2, paths=PATHS):
-    """The :class:`SgmWidths` of a configuration (validated by :func:`check_penalties`)."""
-    check_penalties(max_cost, p1, p2, paths=paths)
-    return SgmWidths(cost=int(max_cost).bit_length(),
-                     path=sgm_path_cost_bits(max_cost, p2),
-                     step=int(p2).bit_length(),
-                     candidate=(max_cost + 2 * p2).bit_length(),
-                     summed=sgm_summed_cost_bits(max_cost, p2, len(tuple(paths))))
-
-
-def row_memory_bits(width, disparities, max_cost, p2, paths=PATHS):
-    """Block-RAM bits SGM needs for the previous row: (path costs, minima).
-
-    Each configured path from the row above keeps W x D path costs of bitlen(Cmax + P2)
-    bits; the second number is its W minima m of the same width, for hardware that
-    stores them instead of recomputing them.
-    """
-    bits = sgm_path_cost_bits(max_cost, p2)
-    rows = sum(1 for path in paths if path in ROW_PATHS)
-    return rows * width * disparities * bits, rows * width * bits
 
 
 def _dtype(max_cost, p2, n_paths):
@@ -177,7 +76,7 @@ def cost_volume(left, right, params, dtype=None, threads=None):
     left_t, right_t = _transforms(left, right, params, threads)
     if dtype is None:
         dtype = np.uint16 if params.max_cost <= np.iinfo(np.uint16).max else np.uint32
-    return _band_costs(left_t, right_t, params, dtype)
+    return _costs_disparity_last(left_t, right_t, params, dtype)
 
 
 def _transforms(left, right, params, threads):
@@ -187,15 +86,17 @@ def _transforms(left, right, params, threads):
         return list(pool.map(lambda image: transform(image, params), images))
 
 
-def _band_costs(left_t, right_t, params, dtype):
-    """C of a band of transformed rows (last two axes rows, W): (rows, W, D) of ``dtype``."""
+def _costs_disparity_last(left_t, right_t, params, dtype):
+    """C of a band of transformed rows (last two axes rows, W): (rows, W, D) of ``dtype``,
+    disparity last (the box pipeline's band volumes are (D, rows, W))."""
     height, width = left_t.shape[-2:]
     volume = np.empty((height, width, params.disparities), dtype)
     # matching_costs wants an output of the box pipeline's cost dtype, which is wide enough
     # for every C (it holds A*A*Cmax).
     scratch = None
+    sums = pixel_sums(left_t, right_t, params, cost_dtype(params))
     for d in range(params.disparities):
-        scratch = matching_costs(left_t, right_t, d, params, out=scratch)
+        scratch = matching_costs(left_t, right_t, d, params, out=scratch, sums=sums)
         volume[:, :, d] = scratch
         volume[:, :min(d, width), d] = params.max_cost
     return volume
@@ -215,7 +116,7 @@ def path_p2(guide, path, p1, p2, adapt=None):
     out = np.full((height, width), p2, dtype=np.int64)
     if adapt is None:
         return out
-    dx, dy = PATH_STEPS[path]
+    dx, dy = SGM_PATH_STEPS[path]
     image = guide.astype(np.int64)
     # Pixels with a predecessor: y + dy >= 0 and 0 <= x + dx < W.
     ys = slice(max(0, -dy), height)
@@ -256,9 +157,9 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
     volume : (H, W, D) unsigned ndarray
         Matching costs C, e.g. from :func:`cost_volume`, each <= ``max_cost``.
     path : str
-        One of :data:`PATHS`.
+        One of ``params.SGM_PATHS``.
     p1, p2 : int
-        Penalties (validated against ``max_cost`` by :func:`check_penalties`).
+        Penalties (validated against ``max_cost`` by ``params.check_penalties``).
     guide : (H, W) uint8, optional
         Left gray image; required when ``adapt`` is set.
     adapt : int or None
@@ -269,11 +170,11 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
     Returns
     -------
     ndarray
-        L_r in a dtype wide enough for every intermediate (see :func:`widths`). Pixels
+        L_r in a dtype wide enough for every intermediate (see :func:`_dtype`). Pixels
         whose predecessor lies outside the image start fresh: L_r(p, d) = C(p, d).
     """
-    if path not in PATH_STEPS:
-        raise ParameterError(f"SGM path must be one of {', '.join(PATHS)}, not {path!r}")
+    if path not in SGM_PATH_STEPS:
+        raise ParameterError(f"SGM path must be one of {', '.join(SGM_PATHS)}, not {path!r}")
     volume = np.asarray(volume)
     if volume.ndim != 3:
         raise ParameterError(f"cost volume must be (H, W, D), not of shape {volume.shape}")
@@ -290,13 +191,14 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
     if guide is not None and np.shape(guide) != (height, width):
         raise ParameterError(f"guide image must be {width}x{height}, not of shape "
                              f"{np.shape(guide)}")
-    dtype = _dtype(max_cost, p2, len(PATHS))
+    dtype = _dtype(max_cost, p2, SGM_PATH_COUNT)
     costs = volume.astype(dtype, copy=False)
     p1 = dtype(p1)
     p2_map = path_p2(guide if guide is not None else np.zeros((height, width), np.uint8),
                      path, int(p1), p2, adapt).astype(dtype)
     out = np.empty_like(costs)
-    dx, dy = PATH_STEPS[path]
+    # params.sgm_path_steps admits no path with dy = 0 but the left one.
+    dx, dy = SGM_PATH_STEPS[path]
     if dy == 0:
         return _left_band(costs, p1, p2_map, out)
     return _row_band(costs, dx, p1, p2_map, None, out)
@@ -343,7 +245,7 @@ def _row_band(costs, dx, p1, p2_map, previous, out):
     return out
 
 
-def aggregate(volume, p1, p2, paths=PATHS, guide=None, adapt=None, max_cost=None,
+def aggregate(volume, p1, p2, paths=SGM_PATHS, guide=None, adapt=None, max_cost=None,
               threads=None):
     """S(p, d): the sum of L_r over ``paths``. (H, W, D) unsigned.
 
@@ -353,7 +255,8 @@ def aggregate(volume, p1, p2, paths=PATHS, guide=None, adapt=None, max_cost=None
     volume = np.asarray(volume)
     if max_cost is None:
         max_cost = int(volume.max()) if volume.size else 0
-    check_penalties(max_cost, p1, p2, adapt, paths)
+    check_penalties(max_cost, p1, p2, adapt)
+    check_sgm_paths(paths)
     workers = max(1, min(len(paths), threads or os.cpu_count() or 1))
     with ThreadPoolExecutor(max_workers=workers) as pool:
         parts = list(pool.map(lambda path: path_costs(volume, path, p1, p2, guide, adapt,
@@ -399,7 +302,7 @@ def _checked(raw_left, raw_right, disparities, lr_threshold):
     return DisparityResult(checked, raw_left, raw_right)
 
 
-def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=None):
+def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, threads=None):
     """Disparity map of the SGM pipeline, INVALID (-1) where none is reported.
 
     Parameters
@@ -415,7 +318,7 @@ def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=
     p1, p2 : int
         Penalties, 0 <= P1 <= P2 <= ``max_path_penalty(params.max_cost)``.
     paths : sequence of str
-        Subset of :data:`PATHS` to sum.
+        Subset of ``params.SGM_PATHS`` to sum.
     adapt : int or None
         Adaptive-P2 threshold exponent t (1 .. 7), None for a constant P2.
     threads : int, optional
@@ -429,16 +332,12 @@ def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=
     if not isinstance(params, StereoParams):
         raise ParameterError("params must be a StereoParams")
     left, right = np.asarray(left), np.asarray(right)
-    for name, image in (("left", left), ("right", right)):
-        if image.ndim != 2 or image.dtype != np.uint8:
-            raise ParameterError(
-                f"{name} image must be 8-bit gray (2-D uint8), not {image.dtype} {image.shape}")
-    if left.shape != right.shape:
-        raise ParameterError("left and right images must have the same size")
-    check_penalties(params.max_cost, p1, p2, adapt, paths)
+    check_gray_pair(left, right)
+    check_penalties(params.max_cost, p1, p2, adapt)
+    check_sgm_paths(paths)
     paths = tuple(paths)
     height, width = left.shape
-    dtype = _dtype(params.max_cost, p2, len(PATHS))
+    dtype = _dtype(params.max_cost, p2, SGM_PATH_COUNT)
     left_t, right_t = _transforms(left, right, params, threads)
     p2_maps = {path: path_p2(left, path, p1, p2, adapt).astype(dtype) for path in paths}
     p1 = dtype(p1)
@@ -446,24 +345,25 @@ def disparity_map(left, right, params, p1, p2, paths=PATHS, adapt=None, threads=
     # the paths from above carry their last row from one band into the next, the left
     # path and the winners work row by row anyway, so bands change no bit of the result.
     rows = max(1, _BAND_ELEMENTS // (width * params.disparities))
-    previous = {path: None for path in paths if path != "left"}
+    previous = {path: None for path in paths if path in SGM_ROW_PATHS}
     raw_left, raw_right = [], []
     workers = max(1, min(len(paths), threads or os.cpu_count() or 1))
     with ThreadPoolExecutor(max_workers=workers) as pool:
         for y0 in range(0, height, rows):
             y1 = min(height, y0 + rows)
-            costs = _band_costs(left_t[..., y0:y1, :], right_t[..., y0:y1, :], params, dtype)
+            costs = _costs_disparity_last(left_t[..., y0:y1, :], right_t[..., y0:y1, :],
+                                          params, dtype)
 
             def one_path(path):
                 out = np.empty_like(costs)
-                if path == "left":
+                if path not in SGM_ROW_PATHS:
                     return _left_band(costs, p1, p2_maps[path][y0:y1], out)
-                return _row_band(costs, PATH_STEPS[path][0], p1, p2_maps[path][y0:y1],
+                return _row_band(costs, SGM_PATH_STEPS[path][0], p1, p2_maps[path][y0:y1],
                                  previous[path], out)
 
             parts = list(pool.map(one_path, paths))
             for path, part in zip(paths, parts):
-                if path != "left":
+                if path in SGM_ROW_PATHS:
                     previous[path] = part[-1].copy()
             summed = parts[0]
             for part in parts[1:]:

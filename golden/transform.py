@@ -8,6 +8,8 @@ fall outside the frame. Neighbours are numbered n = 0 .. k-1 in raster order of 
 
 import numpy as np
 
+from ..params import check_transform_table
+
 __all__ = ["window_offsets", "neighbour_planes", "rank", "census", "ext_rank", "ext_census",
            "transform"]
 
@@ -110,7 +112,10 @@ def ext_census(image, block):
     return out.transpose(2, 0, 1)
 
 
-_TRANSFORMS = {"rank": rank, "census": census, "ext-rank": ext_rank, "ext-census": ext_census}
+#: The transform functions ``(image, block) -> transformed`` by transform name.
+_TRANSFORMS = check_transform_table(
+    {"rank": rank, "census": census, "ext-rank": ext_rank, "ext-census": ext_census},
+    "golden.transform._TRANSFORMS")
 
 
 def transform(image, params):

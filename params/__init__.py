@@ -1,6 +1,6 @@
 """The parameter object and the user-facing errors that golden/, hdl/, gen/ and sim/ share.
 
-A neutral module (it imports nothing of the project), so that the golden model, the
+A neutral package (it imports nothing of the project), so that the golden model, the
 hardware, the command line and the co-simulation can all depend on it without depending
 on each other. Every entry point builds a :class:`StereoParams` first; its constructor
 checks what every part needs (the algorithm's parameters and the frame size), so the
@@ -8,18 +8,27 @@ golden model, the hardware generator and the co-simulation reject those configur
 with the same message. What only one part needs is checked there: the hardware's size
 limits in :func:`npstereo.hdl.plan.check_buildable`, image contents in the golden model's
 loaders and pipeline, file names in the commands.
+
+The transforms are described in :mod:`.transforms`, semi-global aggregation's paths,
+penalties and defaults in :mod:`.sgm`; everything is importable from here.
 """
 
-import numbers
 from dataclasses import dataclass, replace
 
-__all__ = ["TRANSFORMS", "LINE_BUFFERS", "LUT_INPUTS", "SGM", "SGM_PATH_COUNT", "SGM_DEFAULT_P1",
-           "SGM_DEFAULT_P2", "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT", "P2_ADAPT_OFF",
-           "UserError", "ParameterError", "StereoParams", "max_path_penalty",
-           "check_penalties", "sgm_path_cost_bits", "sgm_summed_cost_bits"]
+from .errors import ParameterError, UserError, is_int, is_integral
+from .sgm import (P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2,
+                  SGM_MAX_ADAPT, SGM_PATH_COUNT, SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED,
+                  SGM_ROW_PATHS, check_penalties, check_sgm_paths, max_path_penalty,
+                  sgm_path_cost_bits, sgm_path_steps, sgm_summed_cost_bits)
+from .transforms import (REDUCTIONS, TRANSFORM_SPECS, TRANSFORMS, TransformSpec,
+                         check_transform_table)
 
-#: Transform names as the command line spells them, in the paper's order.
-TRANSFORMS = ("rank", "census", "ext-rank", "ext-census")
+__all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
+           "check_transform_table", "LINE_BUFFERS", "LUT_INPUTS", "SGM", "SGM_PATH_STEPS",
+           "SGM_PATHS", "SGM_PATH_COUNT", "SGM_ROW_PATHS", "sgm_path_steps", "check_sgm_paths",
+           "SGM_DEFAULT_P1", "SGM_DEFAULT_P2", "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT",
+           "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
+           "max_path_penalty", "check_penalties", "sgm_path_cost_bits", "sgm_summed_cost_bits"]
 
 #: What the hardware keeps of the rows above for the vertical aggregation: the matching
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
@@ -31,106 +40,6 @@ LINE_BUFFERS = ("auto", "costs", "transforms", "pixels")
 #: Gowin: the inverted differences go to adders) or 6 (Intel ALMs, AMD/Xilinx: three
 #: differences at a time go to 3:2 compressors whose LUTs also invert them).
 LUT_INPUTS = (4, 6)
-
-#: The ``aggregation`` value that replaces the A x A box by semi-global aggregation along
-#: the four raster-order paths (docs/semantics.md, "Semi-global aggregation").
-SGM = "sgm"
-#: Paths an SGM core sums (left, top-left, top, top-right): what its widths are made for.
-SGM_PATH_COUNT = 4
-#: The recommended SGM penalties, chosen by measurement together with census 7x7
-#: (docs/quality.md, "SGM: choosing the defaults"): P1, P2 and the adaptive-P2 exponent t.
-#: They make the census 7x7 path cost bitlen(48 + 79) = 7 bits, what the block-RAM budget
-#: allows at 450 x 375, D = 100.
-SGM_DEFAULT_P1 = 24
-SGM_DEFAULT_P2 = 79
-SGM_DEFAULT_ADAPT = 5
-#: Adaptive P2 works on 8-bit gray steps g <= 255 (at most 8 bits): from t = 8 on the shift
-#: bitlen(g) - t is never positive, so such a t would be a constant P2 in disguise.
-SGM_MAX_ADAPT = 7
-#: ``StereoParams.p2_adapt`` value of a constant P2 (``None`` there means the default t).
-P2_ADAPT_OFF = 0
-
-
-class UserError(Exception):
-    """Anything the user can fix: a bad parameter, a missing or malformed file, a missing tool.
-
-    The message is one line naming what is wrong and what is allowed; the command line
-    prints it as is and exits with code 2, without a traceback.
-    """
-
-
-class ParameterError(UserError, ValueError):
-    """A parameter outside what the model and the hardware support.
-
-    The message is one line naming the parameter, the offending value and what is allowed;
-    the command line prints it as is and exits with code 2.
-    """
-
-
-def _is_int(value):
-    """A true integer: ``bool`` is an ``int`` subclass, but ``block=True`` is a mistake."""
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
-def _is_integral(value):
-    """An integer of any kind (numpy's included: sweeps compute penalties with numpy), not
-    a ``bool``."""
-    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
-
-
-def max_path_penalty(max_cost):
-    """Largest P2 allowed for a matching cost of maximum ``max_cost`` (P2max).
-
-    The path cost may be at most two bits wider than the matching cost:
-    Cmax + P2 <= 2^(bitlen(Cmax) + 2) - 1. For census 5x5 (Cmax = 24) that is P2 <= 103,
-    which keeps the path cost at 7 bits, the width the block-RAM budget allows at
-    450 x 375, D = 100.
-    """
-    return (1 << (int(max_cost).bit_length() + 2)) - 1 - int(max_cost)
-
-
-def check_penalties(max_cost, p1, p2, adapt=None):
-    """Validate SGM penalties; raise :class:`ParameterError` with a one-line message.
-
-    The one definition of the rules, for :class:`StereoParams` and the golden model's
-    whole-image functions (``npstereo.golden.sgm``).
-
-    Parameters
-    ----------
-    max_cost : int
-        Cmax, the largest matching cost of the transform (``StereoParams.max_cost``).
-    p1, p2 : int
-        Penalties: 0 <= P1 <= P2 <= :func:`max_path_penalty` (Cmax).
-    adapt : int or None
-        Adaptive-P2 threshold exponent t, 1 <= t <= :data:`SGM_MAX_ADAPT`, or None for a
-        constant P2.
-    """
-    if not _is_integral(p1) or p1 < 0:
-        raise ParameterError(f"P1 must be an integer >= 0, not {p1!r}")
-    if not _is_integral(p2) or p2 < p1:
-        raise ParameterError(f"P2 must be an integer >= P1 ({p1}), not {p2!r}")
-    limit = max_path_penalty(max_cost)
-    if p2 > limit:
-        raise ParameterError(
-            f"P2 must be <= {limit} for a matching cost of at most {max_cost} (path cost "
-            f"at most {int(max_cost).bit_length() + 2} bits), not {p2!r}")
-    if adapt is not None and (not _is_integral(adapt) or not 1 <= adapt <= SGM_MAX_ADAPT):
-        raise ParameterError(f"adaptive P2 exponent must be an integer 1 .. {SGM_MAX_ADAPT} "
-                             f"(or off), not {adapt!r}")
-
-
-def sgm_path_cost_bits(max_cost, p2):
-    """Width of a path cost L_r and of its minimum: bitlen(Cmax + P2).
-
-    Every candidate of the recurrence's minimum is >= the predecessor's minimum m and the
-    last one is m + P2, so 0 <= L_r <= Cmax + P2 (docs/semantics.md, "Widths").
-    """
-    return (int(max_cost) + int(p2)).bit_length()
-
-
-def sgm_summed_cost_bits(max_cost, p2, paths=SGM_PATH_COUNT):
-    """Width of the summed cost S over ``paths`` paths: bitlen(paths (Cmax + P2))."""
-    return (paths * (int(max_cost) + int(p2))).bit_length()
 
 
 @dataclass(frozen=True)
@@ -149,7 +58,7 @@ class StereoParams:
         Calculation rounds R; each round evaluates D/R disparities. Must divide D.
     aggregation : int or str
         Cost aggregation: an A x A box (A odd, >= 1; the paper uses 3) or :data:`SGM`,
-        semi-global aggregation along four paths (docs/semantics.md).
+        semi-global aggregation along :data:`SGM_PATHS` (docs/semantics.md).
     lr_threshold : int or None
         Left/right consistency threshold T (>= 0); ``None`` disables the check.
     width, height : int or None
@@ -191,12 +100,12 @@ class StereoParams:
         if self.transform not in TRANSFORMS:
             raise ParameterError(
                 f"transform must be one of {', '.join(TRANSFORMS)}, not {self.transform!r}")
-        if not _is_int(self.block) or self.block < 3 or self.block % 2 == 0:
+        if not is_int(self.block) or self.block < 3 or self.block % 2 == 0:
             raise ParameterError(f"block size must be an odd integer >= 3, not {self.block!r}")
-        if not _is_int(self.disparities) or self.disparities < 2:
+        if not is_int(self.disparities) or self.disparities < 2:
             raise ParameterError(
                 f"disparities must be an integer >= 2, not {self.disparities!r}")
-        if not _is_int(self.rounds) or self.rounds < 1:
+        if not is_int(self.rounds) or self.rounds < 1:
             raise ParameterError(f"rounds must be an integer >= 1, not {self.rounds!r}")
         if self.disparities % self.rounds != 0:
             raise ParameterError(
@@ -204,7 +113,7 @@ class StereoParams:
         if self.aggregation == SGM:
             self._resolve_penalties()
         else:
-            if (not _is_int(self.aggregation) or self.aggregation < 1
+            if (not is_int(self.aggregation) or self.aggregation < 1
                     or self.aggregation % 2 == 0):
                 raise ParameterError(f"aggregation must be an odd window size >= 1 or "
                                      f"{SGM!r}, not {self.aggregation!r}")
@@ -214,22 +123,22 @@ class StereoParams:
                         f"{name} is an SGM parameter: it needs aggregation {SGM!r}, not a "
                         f"{self.aggregation}x{self.aggregation} box")
         if self.lr_threshold is not None and (
-                not _is_int(self.lr_threshold) or self.lr_threshold < 0):
+                not is_int(self.lr_threshold) or self.lr_threshold < 0):
             raise ParameterError(
                 f"lr threshold must be an integer >= 0 (or disabled), not {self.lr_threshold!r}")
         if self.width is not None:
-            if not _is_int(self.width) or self.width <= self.first_valid_column:
+            if not is_int(self.width) or self.width <= self.first_valid_column:
                 raise ParameterError(
                     f"image width must be an integer > {self.first_valid_column} for "
                     f"{self.disparities} disparities (first valid column "
                     f"{self.first_valid_column}), not {self.width!r}")
         if self.height is not None:
-            if not _is_int(self.height) or self.height < 1:
+            if not is_int(self.height) or self.height < 1:
                 raise ParameterError(f"image height must be an integer >= 1, not {self.height!r}")
         if self.line_buffer not in LINE_BUFFERS:
             raise ParameterError(f"line buffer must be one of {', '.join(LINE_BUFFERS)}, "
                                  f"not {self.line_buffer!r}")
-        if not _is_int(self.lut_inputs) or self.lut_inputs not in LUT_INPUTS:
+        if not is_int(self.lut_inputs) or self.lut_inputs not in LUT_INPUTS:
             raise ParameterError(f"lut inputs must be one of "
                                  f"{', '.join(map(str, LUT_INPUTS))}, not {self.lut_inputs!r}")
 
@@ -243,12 +152,12 @@ class StereoParams:
         except ParameterError as error:
             # A P2 error (P1 itself is fine) may be about a default the user never typed:
             # say where the number came from.
-            p1_fine = _is_integral(p1) and p1 >= 0
+            p1_fine = is_integral(p1) and p1 >= 0
             if p1_fine and (self.p1 is None or self.p2 is None):
                 raise ParameterError(f"{error} (SGM defaults P1 = {SGM_DEFAULT_P1}, "
                                      f"P2 = {SGM_DEFAULT_P2})") from None
             raise
-        off = _is_integral(adapt) and adapt == P2_ADAPT_OFF
+        off = is_integral(adapt) and adapt == P2_ADAPT_OFF
         check_penalties(self.max_cost, p1, p2, None if off else adapt)
         # Frozen: the resolved values are set once, here. Plain ints, so that repr() (the
         # report cache's key) and JSON do not depend on how a caller spelled the number.
@@ -301,20 +210,21 @@ class StereoParams:
         return self.disparities - 1 + max(1, self.agg_radius)
 
     @property
+    def spec(self):
+        """The :class:`TransformSpec` of ``transform``."""
+        return TRANSFORM_SPECS[self.transform]
+
+    @property
     def stored_rows(self):
         """What the hardware stores of the rows above: "costs", "transforms" or "pixels".
 
         "pixels" keeps only A - 1 more rows of pixels and transforms the rows above again;
-        "transforms" keeps their transformed pixels; "costs" their costs. "auto" stores
-        what is narrow and recomputes what is cheap: the census transform (a k-bit word,
-        one comparison per bit) is recomputed from pixels, the rank and extended rank
-        transforms (one number each, but a sum over the window to recompute) are stored,
-        and the extended census keeps costs: its transform is 8k bits wide and its cost (k
-        byte-wise absolute differences and their sum) too large to compute A times.
+        "transforms" keeps their transformed pixels; "costs" their costs. "auto" takes the
+        transform's choice (``TransformSpec.auto_stored_rows``).
         """
         if self.line_buffer != "auto":
             return self.line_buffer
-        return {"ext-census": "costs", "census": "pixels"}.get(self.transform, "transforms")
+        return self.spec.auto_stored_rows
 
     @property
     def lr_check(self):
@@ -325,19 +235,12 @@ class StereoParams:
     @property
     def transform_bits(self):
         """Width of one transformed pixel."""
-        k = self.neighbours
-        return {
-            "rank": k.bit_length(),
-            "census": k,
-            "ext-rank": (k * 255).bit_length(),
-            "ext-census": 8 * k,
-        }[self.transform]
+        return self.spec.transform_bits(self.neighbours)
 
     @property
     def max_cost(self):
         """Largest matching cost of one pixel pair."""
-        k = self.neighbours
-        return k if self.transform in ("rank", "census") else 255 * k
+        return self.spec.max_cost(self.neighbours)
 
     @property
     def cost_bits(self):

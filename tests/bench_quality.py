@@ -53,7 +53,7 @@ from npstereo.golden.lr_check import INVALID, lr_check
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
-from npstereo.params import StereoParams, UserError
+from npstereo.params import SGM_RECOMMENDED, StereoParams, UserError
 
 #: L/R threshold of the project's default configuration (docs/semantics.md).
 LR_THRESHOLD = 3
@@ -61,12 +61,11 @@ LR_THRESHOLD = 3
 #: npstereo box configurations: (transform, block, aggregation size).
 BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 
-#: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent).
-#: The first is the recommended default (docs/sgm.md, "Choosing the defaults").
-SGM = [(sgm.DEFAULT_TRANSFORM, sgm.DEFAULT_BLOCK, sgm.DEFAULT_P1, sgm.DEFAULT_P2,
-        sgm.DEFAULT_ADAPT),
-       ("census", 5, 16, 96, 4),      # the best census 5x5 on clean real scenes
-       ("census", 5, 12, 32, None)]   # the best census 5x5 with a constant P2
+#: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent). The
+#: recommended ones first: the default (docs/sgm.md, "Choosing the defaults") and the best
+#: census 5x5 on clean real scenes; then the best census 5x5 with a constant P2.
+SGM = [tuple(fields[name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
+       for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None)]
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).

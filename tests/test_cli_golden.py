@@ -9,7 +9,7 @@ import pytest
 from PIL import Image
 
 from npstereo.gen.cli import main
-from npstereo.params import StereoParams
+from npstereo.params import SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2, StereoParams
 from npstereo.golden import sgm
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
@@ -242,8 +242,8 @@ def test_demo_writes_maps_and_summary(capsys, tmp_path, default_pair):
     # The SGM row is the golden SGM map with the defaults, measured.
     row = summary["results"][-1]
     params = StereoParams("census", 7, 32)
-    expected = evaluate(sgm.disparity_map(*default_pair.gray(), params, sgm.DEFAULT_P1,
-                                          sgm.DEFAULT_P2, adapt=sgm.DEFAULT_ADAPT).disparity,
+    expected = evaluate(sgm.disparity_map(*default_pair.gray(), params, SGM_DEFAULT_P1,
+                                          SGM_DEFAULT_P2, adapt=SGM_DEFAULT_ADAPT).disparity,
                         default_pair.ground_truth, 32)
     assert row["correct"] == pytest.approx(expected.correct)
     assert row["aggregation"] == "SGM P1=24 P2=79 t=5"

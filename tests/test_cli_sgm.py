@@ -14,7 +14,7 @@ from npstereo.gen.cli import main
 from npstereo.golden import sgm
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
-from npstereo.params import StereoParams
+from npstereo.params import SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2, StereoParams
 
 D = 16
 
@@ -46,16 +46,16 @@ def test_match_sgm_defaults_and_constant_p2(tmp_path, pair_files, small_pair):
                          "--aggregation", "sgm")
     params = StereoParams(transform="census", block=7, disparities=D)
     assert np.array_equal(defaults, sgm.disparity_map(
-        *gray, params, sgm.DEFAULT_P1, sgm.DEFAULT_P2, adapt=sgm.DEFAULT_ADAPT).disparity)
+        *gray, params, SGM_DEFAULT_P1, SGM_DEFAULT_P2, adapt=SGM_DEFAULT_ADAPT).disparity)
     constant = run_match(tmp_path, pair_files, "constant", "--block", "7",
                          "--aggregation", "sgm", "--no-p2-adapt", "--no-lr-check")
-    expected = sgm.disparity_map(*gray, params.replace(lr_threshold=None), sgm.DEFAULT_P1,
-                                 sgm.DEFAULT_P2).disparity
+    expected = sgm.disparity_map(*gray, params.replace(lr_threshold=None), SGM_DEFAULT_P1,
+                                 SGM_DEFAULT_P2).disparity
     assert np.array_equal(constant, expected)
     # Counterpart: adaptive P2 changes this map, so dropping --no-p2-adapt would fail above.
     assert not np.array_equal(expected, sgm.disparity_map(
-        *gray, params.replace(lr_threshold=None), sgm.DEFAULT_P1, sgm.DEFAULT_P2,
-        adapt=sgm.DEFAULT_ADAPT).disparity)
+        *gray, params.replace(lr_threshold=None), SGM_DEFAULT_P1, SGM_DEFAULT_P2,
+        adapt=SGM_DEFAULT_ADAPT).disparity)
 
 
 def test_eval_takes_a_grid_of_aggregations(capsys, tmp_path, pair_files, small_pair):

@@ -212,14 +212,16 @@ def test_broken_padding_is_caught(monkeypatch):
 
 def test_broken_costs_are_caught(monkeypatch):
     """Census bits combined with OR instead of XOR, ext-census without the factor 2."""
-    monkeypatch.setitem(golden_cost._COSTS, "census", lambda left, right, out: np.copyto(
-        out, np.bitwise_count(left | right).sum(axis=0)))
+    def with_or(left, right, out, totals):
+        np.copyto(out, np.bitwise_count(left | right).sum(axis=0))
+    monkeypatch.setitem(golden_cost._COSTS, "census", (with_or, None))
     assert stage_mismatches("census", 3, 3, "levels")
 
     def half(left, right, out, totals):
         np.add.reduce(np.minimum(left, right), axis=0, dtype=out.dtype, out=out)
         np.subtract(totals, out, out=out)
-    monkeypatch.setattr(golden_cost, "_ext_census_cost", half)
+    monkeypatch.setitem(golden_cost._COSTS, "ext-census",
+                        (half, golden_cost._COSTS["ext-census"][1]))
     assert stage_mismatches("ext-census", 3, 3, "levels")
 
 

@@ -18,7 +18,10 @@ import numpy as np
 import pytest
 
 from npstereo.golden import pipeline, sgm
-from npstereo.params import TRANSFORMS, ParameterError, StereoParams
+from npstereo.params import (SGM_DEFAULT_P1, SGM_DEFAULT_P2, SGM_PATH_STEPS, SGM_PATHS,
+                             SGM_RECOMMENDED, TRANSFORMS, ParameterError, StereoParams, check_penalties,
+                             check_sgm_paths, max_path_penalty, sgm_path_cost_bits,
+                             sgm_path_steps, sgm_summed_cost_bits)
 
 import reference
 
@@ -163,17 +166,17 @@ def test_cost_volume_is_cmax_where_no_partner():
 # Single paths and their combinations -------------------------------------------------------
 
 
-@pytest.mark.parametrize("path", sgm.PATHS)
+@pytest.mark.parametrize("path", SGM_PATHS)
 @pytest.mark.parametrize("p1, p2", [(0, 0), (1, 3), (3, 7), (2, 40), (5, 5)])
 def test_each_path_matches_reference(path, p1, p2):
     # A seed fixed per case (hash() of a string changes from run to run).
-    rng = np.random.default_rng([sgm.PATHS.index(path), p1, p2])
+    rng = np.random.default_rng([SGM_PATHS.index(path), p1, p2])
     costs = random_volume(rng, 6, 9, 5, 8)
     expected = as_array(ref_path(costs.tolist(), path, p1, p2))
     assert np.array_equal(golden_path(costs, path, p1, p2, max_cost=8), expected)
 
 
-@pytest.mark.parametrize("path", sgm.PATHS)
+@pytest.mark.parametrize("path", SGM_PATHS)
 @pytest.mark.parametrize("adapt", [1, 2, 4, 7])
 def test_each_path_with_adaptive_p2_matches_reference(path, adapt):
     left, _ = make_pair("ramp", 6, 11, adapt)
@@ -188,7 +191,7 @@ def test_path_combinations_match_reference(count):
     rng = np.random.default_rng(count)
     costs = random_volume(rng, 5, 8, 4, 24)
     image = rng.integers(0, 256, (5, 8)).astype(np.uint8)
-    for paths in itertools.combinations(sgm.PATHS, count):
+    for paths in itertools.combinations(SGM_PATHS, count):
         expected = as_array(ref_summed(costs.tolist(), paths, 2, 30, image, 3))
         summed = sgm.aggregate(costs.astype(np.uint16), 2, 30, paths, guide=image, adapt=3,
                                max_cost=24)
@@ -220,7 +223,7 @@ MAP_CASES = [
 def test_disparity_map_matches_reference(name, block, D, kind, p1, p2, adapt, thresholds):
     left, right = make_pair(kind, 7, D + 9, D)
     for threshold in thresholds:
-        expected = ref_map(left, right, name, block, D, p1, p2, sgm.PATHS, adapt, threshold)
+        expected = ref_map(left, right, name, block, D, p1, p2, SGM_PATHS, adapt, threshold)
         for rounds in (1, D):  # R does not change the result
             params = StereoParams(transform=name, block=block, disparities=D, rounds=rounds,
                                   lr_threshold=threshold)
@@ -234,7 +237,7 @@ def test_disparity_map_band_seams(monkeypatch, band_rows):
     name, block, D, kind, p1, p2, adapt, _ = MAP_CASES[1]
     left, right = make_pair(kind, 7, D + 9, D)
     monkeypatch.setattr(sgm, "_BAND_ELEMENTS", band_rows * (D + 9) * D)
-    expected = ref_map(left, right, name, block, D, p1, p2, sgm.PATHS, adapt, 1)
+    expected = ref_map(left, right, name, block, D, p1, p2, SGM_PATHS, adapt, 1)
     params = StereoParams(transform=name, block=block, disparities=D, lr_threshold=1)
     result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt, threads=3)
     assert np.array_equal(result.disparity, expected)
@@ -253,7 +256,7 @@ def test_broken_band_seam_is_caught(monkeypatch):
     name, block, D, kind, p1, p2, adapt, _ = MAP_CASES[1]
     left, right = make_pair(kind, 7, D + 9, D)
     params = StereoParams(transform=name, block=block, disparities=D, lr_threshold=None)
-    expected = ref_map(left, right, name, block, D, p1, p2, sgm.PATHS, adapt, None)
+    expected = ref_map(left, right, name, block, D, p1, p2, SGM_PATHS, adapt, None)
     result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
     assert not np.array_equal(result.disparity, expected)
 
@@ -262,7 +265,7 @@ def test_disparity_map_keeps_and_rejects():
     # Counterpart of the map comparison: the case has both kept and invalid pixels beyond
     # the border, so an all-invalid or all-kept map could not pass it.
     left, right = make_pair("random", 7, 15, 6)
-    expected = ref_map(left, right, "census", 5, 6, 4, 20, sgm.PATHS, None, 0)
+    expected = ref_map(left, right, "census", 5, 6, 4, 20, SGM_PATHS, None, 0)
     assert (expected[:, 6:] >= 0).any() and (expected[:, 6:] < 0).any()
     assert (expected[:, :6] < 0).all()
 
@@ -278,7 +281,7 @@ START = {
 }
 
 
-@pytest.mark.parametrize("path", sgm.PATHS)
+@pytest.mark.parametrize("path", SGM_PATHS)
 def test_paths_start_fresh_at_the_border(path):
     rng = np.random.default_rng(11)
     costs = random_volume(rng, 5, 7, 4, 24)
@@ -296,7 +299,7 @@ def test_frame_of_one_row_and_one_column():
     rng = np.random.default_rng(2)
     for shape in ((1, 9, 5), (6, 1, 5), (1, 1, 3)):
         costs = random_volume(rng, *shape, 24)
-        for path in sgm.PATHS:
+        for path in SGM_PATHS:
             expected = as_array(ref_path(costs.tolist(), path, 2, 10))
             assert np.array_equal(golden_path(costs, path, 2, 10, max_cost=24), expected)
 
@@ -305,32 +308,32 @@ def test_frame_of_one_row_and_one_column():
 
 
 def test_widths_formulae():
-    w = sgm.widths(24, 12, 64)
-    assert (w.cost, w.path, w.step, w.candidate, w.summed) == (5, 7, 7, 8, 9)
-    assert sgm.max_path_penalty(24) == 103 and sgm.widths(24, 12, 103).path == 7
-    assert sgm.widths(80, 10, 47).path == 7 and sgm.widths(80, 10, 48).path == 8
-    w = sgm.widths(48, 24, 79)  # the defaults, census 7x7
-    assert (w.cost, w.path, w.step, w.candidate, w.summed) == (6, 7, 7, 8, 9)
+    assert (sgm_path_cost_bits(24, 64), sgm_summed_cost_bits(24, 64)) == (7, 9)
+    assert max_path_penalty(24) == 103 and sgm_path_cost_bits(24, 103) == 7
+    assert sgm_path_cost_bits(80, 47) == 7 and sgm_path_cost_bits(80, 48) == 8
+    defaults = StereoParams(**SGM_RECOMMENDED[0])  # census 7x7, P2 = 79
+    assert (defaults.cost_bits, defaults.path_cost_bits,
+            defaults.aggregated_cost_bits) == (6, 7, 9)
 
 
 @pytest.mark.parametrize("cmax", [1, 24, 48, 6120, 91800])
 @pytest.mark.parametrize("adapt", [None, 1])
 def test_widths_hold_at_extreme_costs(cmax, adapt):
     """Golden equals the unbounded reference at the largest P2, costs only 0 and Cmax."""
-    p2 = sgm.max_path_penalty(cmax)
+    p2 = max_path_penalty(cmax)
     p1 = p2 // 3
     rng = np.random.default_rng(cmax)
     costs = random_volume(rng, 5, 9, 6, cmax, extreme=True)
     image = rng.choice([0, 255], (5, 9)).astype(np.uint8)
-    width = sgm.widths(cmax, p1, p2)
     parts = []
-    for path in sgm.PATHS:
+    for path in SGM_PATHS:
         expected = as_array(ref_path(costs.tolist(), path, p1, p2, image, adapt))
         got = golden_path(costs, path, p1, p2, image, adapt, max_cost=cmax)
         assert np.array_equal(got, expected), path
-        assert 0 <= expected.min() and expected.max() <= cmax + p2 < 2 ** width.path
+        assert 0 <= expected.min() and expected.max() <= cmax + p2 < \
+            2 ** sgm_path_cost_bits(cmax, p2)
         parts.append(got)
-    assert sum(parts).max() < 2 ** width.summed
+    assert sum(parts).max() < 2 ** sgm_summed_cost_bits(cmax, p2)
 
 
 @pytest.mark.parametrize("cmax, p1, p2", [(24, 12, 103), (24, 1, 24), (80, 0, 431), (3, 3, 3)])
@@ -346,17 +349,6 @@ def test_path_width_bound_is_reached(cmax, p1, p2):
     got = golden_path(costs, "left", p1, p2, max_cost=cmax)
     assert np.array_equal(got, expected)
     assert got.max() == cmax + p2
-
-
-def test_row_memory_of_the_defaults_fits_one_mebibit():
-    cmax = StereoParams(transform=sgm.DEFAULT_TRANSFORM, block=sgm.DEFAULT_BLOCK).max_cost
-    costs, minima = sgm.row_memory_bits(450, 100, cmax, sgm.DEFAULT_P2)
-    assert (costs, minima) == (3 * 450 * 100 * 7, 3 * 450 * 7)
-    assert costs + minima <= 2 ** 20
-    sgm.check_penalties(cmax, sgm.DEFAULT_P1, sgm.DEFAULT_P2, sgm.DEFAULT_ADAPT)
-    # Counterpart: one more step of P2 makes the path cost 8 bits, which would not fit.
-    assert sum(sgm.row_memory_bits(450, 100, cmax, sgm.DEFAULT_P2 + 1)) > 2 ** 20
-    assert sgm.row_memory_bits(450, 100, cmax, 96, ("left",)) == (0, 0)
 
 
 # Ties ------------------------------------------------------------------------------------------
@@ -393,9 +385,9 @@ def broken_case_differs():
     params = StereoParams(transform=c["name"], block=c["block"], disparities=c["D"],
                           lr_threshold=c["threshold"])
     expected = ref_map(BROKEN_LEFT, BROKEN_RIGHT, c["name"], c["block"], c["D"], c["p1"],
-                       c["p2"], sgm.PATHS, c["adapt"], c["threshold"])
+                       c["p2"], SGM_PATHS, c["adapt"], c["threshold"])
     costs = as_array(ref_costs(BROKEN_LEFT, BROKEN_RIGHT, c["name"], c["block"], c["D"]))
-    summed_expected = as_array(ref_summed(costs.tolist(), sgm.PATHS, c["p1"], c["p2"],
+    summed_expected = as_array(ref_summed(costs.tolist(), SGM_PATHS, c["p1"], c["p2"],
                                           BROKEN_LEFT, c["adapt"]))
     volume = sgm.cost_volume(BROKEN_LEFT, BROKEN_RIGHT, params)
     summed = sgm.aggregate(volume, c["p1"], c["p2"], guide=BROKEN_LEFT, adapt=c["adapt"],
@@ -419,7 +411,7 @@ def test_broken_wrong_penalty_is_caught():
 
 def test_broken_path_direction_is_caught(monkeypatch):
     # Top-right computed as top-left (the mirrored diagonal).
-    monkeypatch.setitem(sgm.PATH_STEPS, "top-right", (-1, -1))
+    monkeypatch.setattr(sgm, "SGM_PATH_STEPS", {**SGM_PATH_STEPS, "top-right": (-1, -1)})
     assert broken_case_differs()
 
 
@@ -449,14 +441,14 @@ def test_broken_normalisation_is_caught(monkeypatch):
 
 def test_broken_invalid_disparity_rule_is_caught(monkeypatch):
     # Cost 0 (the box pipeline's rule) instead of Cmax where x - d < 0.
-    original = sgm._band_costs
+    original = sgm._costs_disparity_last
 
     def zero_outside(left_t, right_t, params, dtype):
         volume = original(left_t, right_t, params, dtype)
         for d in range(params.disparities):
             volume[:, :d, d] = 0
         return volume
-    monkeypatch.setattr(sgm, "_band_costs", zero_outside)
+    monkeypatch.setattr(sgm, "_costs_disparity_last", zero_outside)
     assert broken_case_differs()
 
 
@@ -514,7 +506,7 @@ def pipeline_matches(fields, left, right):
     adapt = params.p2_adapt or None
     direct = DIRECT(left, right, params, params.p1, params.p2, adapt=adapt)
     expected = ref_map(left, right, params.transform, params.block, params.disparities,
-                       params.p1, params.p2, sgm.PATHS, adapt, params.lr_threshold)
+                       params.p1, params.p2, SGM_PATHS, adapt, params.lr_threshold)
     return (np.array_equal(got.disparity, direct.disparity)
             and np.array_equal(got.left, direct.left) and np.array_equal(got.right, direct.right)
             and got.disparity.dtype == direct.disparity.dtype
@@ -541,11 +533,11 @@ def test_pipeline_sgm_differs_from_the_box():
                                           ("no check", 0)])
 def test_broken_pipeline_dispatch_is_caught(monkeypatch, broken, case):
     """A pipeline that loses one of the configuration's SGM values fails the comparison."""
-    def dispatch(left, right, params, p1, p2, paths=sgm.PATHS, adapt=None, threads=None):
+    def dispatch(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, threads=None):
         if broken == "adapt dropped":
             adapt = None
         elif broken == "golden defaults":
-            p1, p2 = sgm.DEFAULT_P1, sgm.DEFAULT_P2
+            p1, p2 = SGM_DEFAULT_P1, SGM_DEFAULT_P2
         else:
             params = params.replace(lr_threshold=None)
         return DIRECT(left, right, params, p1, p2, paths, adapt, threads)
@@ -559,19 +551,20 @@ def test_broken_pipeline_dispatch_is_caught(monkeypatch, broken, case):
 
 
 @pytest.mark.parametrize("p1, p2, adapt, paths, message", [
-    (-1, 5, None, sgm.PATHS, "P1 must be an integer >= 0"),
-    (1.5, 5, None, sgm.PATHS, "P1 must be an integer >= 0"),
-    (6, 5, None, sgm.PATHS, "P2 must be an integer >= P1 (6)"),
-    (1, 104, None, sgm.PATHS, "P2 must be <= 103"),
-    (1, 8, 0, sgm.PATHS, "adaptive P2 exponent must be an integer 1 .. 7"),
-    (1, 8, 8, sgm.PATHS, "adaptive P2 exponent"),
+    (-1, 5, None, SGM_PATHS, "P1 must be an integer >= 0"),
+    (1.5, 5, None, SGM_PATHS, "P1 must be an integer >= 0"),
+    (6, 5, None, SGM_PATHS, "P2 must be an integer >= P1 (6)"),
+    (1, 104, None, SGM_PATHS, "P2 must be <= 103"),
+    (1, 8, 0, SGM_PATHS, "adaptive P2 exponent must be an integer 1 .. 7"),
+    (1, 8, 8, SGM_PATHS, "adaptive P2 exponent"),
     (1, 8, None, ("left", "left"), "SGM paths must be distinct"),
     (1, 8, None, ("bottom",), "SGM paths must be distinct"),
     (1, 8, None, (), "SGM paths must be distinct"),
 ])
 def test_bad_parameters_are_rejected(p1, p2, adapt, paths, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        sgm.check_penalties(24, p1, p2, adapt, paths)
+        check_penalties(24, p1, p2, adapt)
+        check_sgm_paths(paths)
 
 
 def test_bad_volumes_are_rejected():
@@ -593,5 +586,20 @@ def test_bad_volumes_are_rejected():
 def test_boundary_parameters_are_accepted():
     # Counterpart: the edges of every allowed range pass.
     for p1, p2, adapt in ((0, 0, None), (0, 103, 1), (103, 103, 7)):
-        sgm.check_penalties(24, p1, p2, adapt)
-    sgm.check_penalties(24, 1, 2, None, ("top",))
+        check_penalties(24, p1, p2, adapt)
+    check_sgm_paths(("top",))
+
+
+@pytest.mark.parametrize("path, step", [("right", (1, 0)), ("bottom", (0, 1)),
+                                        ("bottom-left", (-1, 1)), ("far-left", (-2, 0)),
+                                        ("two-up", (0, -2))])
+def test_paths_a_raster_order_stream_cannot_compute_are_refused(path, step):
+    """The golden model computes every path with dy = 0 as the left one: a path from the
+    right (or from below, or not from a neighbour) must not get that far."""
+    with pytest.raises(ParameterError) as error:
+        sgm_path_steps({**SGM_PATH_STEPS, path: step})
+    assert str(error.value) == (f"SGM path '{path}' cannot be computed in raster order: its "
+                                f"predecessor (dx, dy) must be (-1, 0) or (-1 .. 1, -1), "
+                                f"not {step}")
+    # Counterpart: the four paths themselves pass, read-only.
+    assert dict(sgm_path_steps(SGM_PATH_STEPS)) == dict(SGM_PATH_STEPS)
