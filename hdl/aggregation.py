@@ -13,7 +13,7 @@ masked from the tag, never from memory contents.
 The result is the aggregated cost S of the *centre* position, a rows and a columns behind
 the newest one.
 
-The units run skewed (:func:`~.plan.unit_skews`): unit i's costs arrive s_i clocks after
+The units run skewed (:func:`~.plan_timing.unit_skews`): unit i's costs arrive s_i clocks after
 unit 0's, and each unit's control (addresses, masks, write enables) is unit 0's handed on
 by a register per step of the skew, so no control signal fans out to every unit. At the
 end unit i's sums wait S - s_i clocks, and all units' sums leave together.
@@ -25,9 +25,9 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
-from .plan import (BANK_CHOICE, aggregation_latency, bank_choice_levels, cost_banks,
-                   horizontal_plan, unit_skews,
-                   vertical_bits, vertical_clocks, vertical_plan)
+from .plan_structure import (BANK_CHOICE, bank_choice_levels, cost_banks, horizontal_plan,
+                             vertical_bits, vertical_plan)
+from .plan_timing import aggregation_latency, unit_skews, vertical_clocks
 from .trees import DEFAULT_EVERY, build_sum
 
 __all__ = ["Aggregation"]
@@ -35,7 +35,7 @@ __all__ = ["Aggregation"]
 
 def _choose_bank(m, words, bank, name):
     """The word of bank ``bank`` among the banks' output registers ``words``, two clocks
-    after ``bank``: chosen among up to :data:`~.plan.BANK_CHOICE` banks at a time, each
+    after ``bank``: chosen among up to :data:`~.plan_structure.BANK_CHOICE` banks at a time, each
     level but the last registered (its digit of the index a clock later each time)."""
     digit = BANK_CHOICE.bit_length() - 1
 
@@ -57,8 +57,9 @@ def _choose_bank(m, words, bank, name):
     return Array(words)[chosen]
 
 
-def _row_inside(y, above, height):
-    """The row ``above`` rows above the newest row ``y`` lies in the frame."""
+def _row_above_inside(y, above, height):
+    """The row ``above`` rows above the newest row ``y`` (row y - above) lies in the
+    frame."""
     return (y >= above) & (y < height + above)
 
 
@@ -93,8 +94,9 @@ class Aggregation(wiring.Component):
     Attributes
     ----------
     costs : In(ArrayLayout(unsigned(bits), D/R))
-        Per unit, s_i clocks after ``tag`` (:func:`~.plan.unit_skews`), the newest position's cost (``stored_rows == "costs"``: one row, masked
-        where x - d < 0 or outside the frame) or vertical sum (``"transforms"``).
+        Per unit, s_i clocks after ``tag`` (:func:`~.plan_timing.unit_skews`), the newest
+        position's cost (``stored_rows == "costs"``: one row, masked where x - d < 0 or
+        outside the frame) or vertical sum (``"transforms"``).
     tag : In(tag_layout)
         The newest position, slot-aligned at this stage's input.
     first, round : In
@@ -148,7 +150,7 @@ class Aggregation(wiring.Component):
     def _vertical(self, m, slots, costs):
         """Column sums over rows y - 2a .. y from a block RAM of the A-1 rows above.
 
-        Word (x, j) of unit i's memory (address x*R + j, in banks of plan.cost_banks)
+        Word (x, j) of unit i's memory (address x*R + j, in banks of plan_structure.cost_banks)
         holds the costs of disparity i*R + j at column x for the A-1 rows above; every
         round reads it and writes it back shifted by one row. A column's word is
         read again only a row later, long after the write-back (three clocks after the
@@ -168,7 +170,7 @@ class Aggregation(wiring.Component):
         # computed, for the rows below may belong to the next frame (see the calculation
         # stage).
         inside = [Signal(name=f"row_ok{k}") for k in range(rows + 1)]
-        m.d.sync += [ok.eq(_row_inside(tag.y, k, p.height)) for k, ok in enumerate(inside)]
+        m.d.sync += [ok.eq(_row_above_inside(tag.y, k, p.height)) for k, ok in enumerate(inside)]
         # Each level of the bank's choice beyond the first is a clock more to the word.
         later = bank_choice_levels(p) - 1
         inside = [slots.delay(ok, 1, 4 + later, f"row_ok{k}", reset_less=True)

@@ -33,9 +33,10 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .common import SlotClock, Store, bits_for, pipe, round_base, tag_layout
 from .matching_cost import MatchingCost
-from .plan import (calculation_timing, centre_copies, cost_rows, masks_after_compare,
-                   row_sum_plan, store_slices, transformed_rows, unit_skews, vertical_bits,
-                   window_first_row, window_pixels)
+from .plan_structure import (centre_copies, cost_rows, masks_after_compare, row_sum_plan,
+                             store_slices, transformed_rows, vertical_bits, window_first_row,
+                             window_pixels)
+from .plan_timing import calculation_timing, unit_skews
 from .sgm import SemiGlobalAggregation, guide_pixels
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
@@ -66,10 +67,11 @@ class CalculationStage(wiring.Component):
         From the input stage, slot-aligned at this stage's input (its layout:
         :class:`~.input_stage.InputStage`).
     keep : In(A * B * B)
-        With :func:`~.plan.masks_after_compare`: the windows' flags of pixels inside the
+        With :func:`~.plan_structure.masks_after_compare`: the windows' flags of pixels inside the
         frame.
     centres_left, centres_right : In(ArrayLayout(unsigned(8), copies))
-        Copies of the windows' centre (:func:`~.plan.centre_copies`), each its own register.
+        Copies of the windows' centre (:func:`~.plan_structure.centre_copies`), each its
+        own register.
     tag : In(tag_layout)
         Centre of those windows.
     first, round : In
@@ -105,7 +107,7 @@ class CalculationStage(wiring.Component):
         # Offsets (clocks after the input) of the datapath's steps; see elaborate().
         self.transformed, self.stored = timing.transformed, timing.stored
         self.costed, self.vertical = timing.costed, timing.vertical
-        #: Clocks by which unit i runs behind unit 0 (:func:`~.plan.unit_skews`).
+        #: Clocks by which unit i runs behind unit 0 (:func:`~.plan_timing.unit_skews`).
         self.skews = unit_skews(params)
         self.sums_latency, self.min_latency = timing.sums, timing.min_tree
         self.latency = timing.latency
@@ -247,13 +249,14 @@ class CalculationStage(wiring.Component):
         the last unit's word of round j as its word j + 1 (written S + 1 clocks after its
         own read of that word and before the next position's), and the newest column as its
         word 0, in the one clock of each slot that those R - 1 writes leave free: the
-        newest word's first clock, ``stored - (R - S)`` (see :func:`~.plan.calculation_timing`).
+        newest word's first clock, ``stored - (R - S)`` (see
+        :func:`~.plan_timing.calculation_timing`).
         So every write comes from a register, and every wire runs between neighbours but
         the one that closes the ring.
 
-        A store is cut into slices (:func:`~.plan.store_slices`), each with its own address
-        counters, write enable and (unit 0) select, so that no register drives more than a
-        slice's RAM cells; a slice's enable includes its counter's ``!= R``, which never
+        A store is cut into slices (:func:`~.plan_structure.store_slices`), each with its
+        own address counters, write enable and (unit 0) select, so that no register drives
+        more than a slice's RAM cells; a slice's enable includes its counter's ``!= R``, which never
         fails but keeps synthesis from merging the slices' enables.
 
         ``tag`` is slot-aligned at ``self.transformed``, ``before`` a clock earlier; with

@@ -14,7 +14,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, better, bits_for, pipe, tag_layout
-from .plan import evaluation_latency
+from .plan_timing import evaluation_latency
 from .trees import build_min_tree
 
 __all__ = ["EvaluationStage"]
@@ -36,7 +36,7 @@ class EvaluationStage(wiring.Component):
     tag_out : Out(tag_layout)
         ``tag`` at ``latency``.
     latency : int
-        :func:`~.plan.evaluation_latency`: the last round, the tree, the winner's register.
+        :func:`~.plan_timing.evaluation_latency`: the last round, the tree, the winner's register.
     """
 
     def __init__(self, params):

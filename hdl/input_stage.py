@@ -22,8 +22,9 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, bits_for, column_inside, pipe, tag_layout, y_range
-from .plan import (INPUT_LATENCY, centre_copies, masks_after_compare, transformed_rows,
-                   window_first_row, window_pixels, window_rows)
+from .plan_structure import (centre_copies, masks_after_compare, transformed_rows,
+                             window_first_row, window_pixels, window_rows)
+from .plan_timing import INPUT_LATENCY
 
 __all__ = ["InputStage"]
 
@@ -60,23 +61,23 @@ def _large_window(params):
     return _early_copies(params) > EARLY_FANOUT
 
 
-def _row_inside(y, offset, height):
+def _offset_row_inside(y, offset, height):
     """Row ``y + offset`` lies inside the frame."""
     return (y >= -offset) & (y < height - offset)
 
 
-def _row_inside_at(y, offset, height):
-    """:func:`_row_inside` of a constant row."""
+def _offset_row_inside_at(y, offset, height):
+    """:func:`_offset_row_inside` of a constant row."""
     return int(0 <= y + offset < height)
 
 
-def _row_before(y, offset, height):
+def _offset_row_before(y, offset, height):
     """Row ``y + offset`` lies in the frame before this one (rows -H .. -1)."""
     return (y < -offset) & (y >= -height - offset)
 
 
-def _row_before_at(y, offset, height):
-    """:func:`_row_before` of a constant row."""
+def _offset_row_before_at(y, offset, height):
+    """:func:`_offset_row_before` of a constant row."""
     return int(-height <= y + offset < 0)
 
 
@@ -112,15 +113,15 @@ class InputStage(wiring.Component):
         Masked windows, row-major (pixel (dy, dx) at (dy + r) * B + dx + r), slot-aligned
         at offset ``latency``; they change only when a position is admitted. With A
         windows per column, window k (k rows above the newest) follows window k - 1.
-        With :func:`~.plan.masks_after_compare`: one unmasked window of
-        :func:`~.plan.window_rows` rows instead, row-major, which the A windows share
-        (window k from row :func:`~.plan.window_first_row`).
+        With :func:`~.plan_structure.masks_after_compare`: one unmasked window of
+        :func:`~.plan_structure.window_rows` rows instead, row-major, which the A windows share
+        (window k from row :func:`~.plan_structure.window_first_row`).
     keep : Out(A * B * B)
-        Only with :func:`~.plan.masks_after_compare`: per window, bit (dy + r) * B + dx + r
-        is 1 where the pixel lies inside the frame of the window's centre; slot-aligned
-        with the window.
+        Only with :func:`~.plan_structure.masks_after_compare`: per window, bit
+        (dy + r) * B + dx + r is 1 where the pixel lies inside the frame of the window's
+        centre; slot-aligned with the window.
     centres_left, centres_right : Out(ArrayLayout(unsigned(8), copies))
-        Copies of the windows' centre pixel (:func:`~.plan.centre_copies`), each a
+        Copies of the windows' centre pixel (:func:`~.plan_structure.centre_copies`), each a
         register of its own, slot-aligned with the windows; not masked (a centre outside
         the frame is a position whose costs no sum takes).
     tag : Out(tag_layout)
@@ -251,7 +252,7 @@ class InputStage(wiring.Component):
             # With the rows above transformed here, each of the A windows of the column is
             # masked by flags of its own (``keeps[k]``, see _centre); census and rank
             # instead share the unmasked rows and mask their comparisons
-            # (plan.masks_after_compare).
+            # (plan_structure.masks_after_compare).
             masked = Signal.like(window, name=f"{name}_window", reset_less=True)
             if masks_after_compare(p):
                 m.d.sync += masked.eq(Cat(columns[c][8 * row:8 * (row + 1)]
@@ -361,7 +362,7 @@ class InputStage(wiring.Component):
         offsets = range(-r, r + 1)
         col_ok = [Signal(name=f"col_ok{o + r}") for o in offsets]
         col_next = Signal(name="col_ok_next")           # column x + r + 1
-        m.d.sync += row_next.eq(_row_inside(window_y, r + 1, height))
+        m.d.sync += row_next.eq(_offset_row_inside(window_y, r + 1, height))
         # With the rows above transformed here again (``stored_rows == "pixels"``) window
         # k is masked in the frame of its own centre, window_y - k, as the transforms
         # variant masked it when that row was the newest: while frames overlap, the
@@ -373,16 +374,18 @@ class InputStage(wiring.Component):
         prev_next = Signal(name="prev_ok_next")
         old = [Signal(name=f"window_old{k}") for k in range(windows)]   # window_y < k
         if windows > 1:
-            m.d.sync += prev_next.eq(_row_before(window_y, r + 1, height))
+            m.d.sync += prev_next.eq(_offset_row_before(window_y, r + 1, height))
 
         def rows_before_at(value):
-            return [prev_ok[o + top].eq(_row_before_at(value, o, height))
-                    for o in row_offsets] + [prev_next.eq(_row_before_at(value, r + 1, height))] + \
+            return [prev_ok[o + top].eq(_offset_row_before_at(value, o, height))
+                    for o in row_offsets] + \
+                   [prev_next.eq(_offset_row_before_at(value, r + 1, height))] + \
                    [old[k].eq(int(value < k)) for k in range(1, windows)]
 
         def rows_at(value):
-            return [row_ok[o + top].eq(_row_inside_at(value, o, height)) for o in row_offsets] + \
-                   [row_next.eq(_row_inside_at(value, r + 1, height))] + \
+            return [row_ok[o + top].eq(_offset_row_inside_at(value, o, height))
+                    for o in row_offsets] + \
+                   [row_next.eq(_offset_row_inside_at(value, r + 1, height))] + \
                    (rows_before_at(value) if windows > 1 else [])
 
         def columns_at(value):

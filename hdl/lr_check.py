@@ -27,7 +27,7 @@ from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, better, bits_for, pipe, round_base, \
     tag_layout
-from .plan import LR_STAGE_A, lr_stage_b, lr_timing
+from .plan_timing import LR_STAGE_A, lr_stage_b, lr_timing
 
 __all__ = ["LRCheck"]
 

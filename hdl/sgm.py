@@ -38,7 +38,7 @@ comparison. a(x + 1, .) needs only L(x, .), so it is formed as soon as L(x, .) i
 after the other, with m(x - 1) known from round 0 on) and waits in a store of R words (LUT
 RAM) for position x + 1. The loop -- a(x, .), C + a, its minimum U(x), m(x), L(x + 1, .),
 a(x + 2, .) -- closes within a slot if R >= T + 6, T the registers of a minimum over D/R
-values (:func:`npstereo.hdl.plan.sgm_min_rounds`). Every step is at a fixed offset after
+values (:func:`npstereo.hdl.plan_timing.sgm_min_rounds`). Every step is at a fixed offset after
 its own position's slot, so the sums have a fixed latency whatever the gaps between
 positions.
 
@@ -55,22 +55,16 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..params import P2_ADAPT_OFF
+from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .common import SlotClock, Store, absolute_difference, bits_for, tag_layout
-from .plan import sgm_timing
+from .plan_timing import sgm_timing
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
 
-__all__ = ["PATHS", "GUIDE", "guide_pixels", "SemiGlobalAggregation"]
-
-#: The four paths, in the order of golden.sgm.PATHS.
-PATHS = ("left", "top-left", "top", "top-right")
-
-#: The paths whose predecessor lies in the row above.
-ROW_PATHS = PATHS[1:]
+__all__ = ["GUIDE", "guide_pixels", "SemiGlobalAggregation"]
 
 #: The left window's pixels adaptive P2 compares, as (dy, dx) from the centre: the pixel
-#: itself, then each path's predecessor in :data:`PATHS` order.
-GUIDE = ((0, 0), (0, -1), (-1, -1), (-1, 0), (-1, 1))
+#: itself, then each path's predecessor in ``params.SGM_PATHS`` order.
+GUIDE = ((0, 0),) + tuple((dy, dx) for dx, dy in SGM_PATH_STEPS.values())
 
 
 def guide_pixels(window, block):
@@ -224,7 +218,7 @@ class SemiGlobalAggregation(wiring.Component):
                        _taps(m, costs, max(t.rows, t.materialise) - 1, "sgm_cost")]
         # Fresh starts of the position, slot-aligned with P2 (two registers after the tag).
         fresh = {}
-        for path in PATHS:
+        for path in SGM_PATHS:
             name = f"sgm_fresh_{path.replace('-', '_')}"
             flag = _register(m, _fresh(path, self.tag.x, self.tag.y, p.width), 1, name)
             fresh[path] = _taps(m, flag, t.guide - 1, name)[-1]
@@ -238,9 +232,9 @@ class SemiGlobalAggregation(wiring.Component):
         rows = {path: _lanes(_taps(m, Cat(*lanes), aligned - t.rows,
                                    f"sgm_{path.replace('-', '_')}_aligned")[-1], units, bits)
                 for path, lanes in rows.items()}
-        plan = register_plan(len(PATHS), self.every, 0, True)
+        plan = register_plan(len(SGM_PATHS), self.every, 0, True)
         for i in range(units):
-            total = build_sum(m, 1, [left[i], *(rows[path][i] for path in ROW_PATHS)], plan)
+            total = build_sum(m, 1, [left[i], *(rows[path][i] for path in SGM_ROW_PATHS)], plan)
             m.d.comb += self.sums[i].eq(total[:p.aggregated_cost_bits])
         m.d.comb += self.centre.eq(slots.delay(self.tag, 0, self.latency, "sgm_centre"))
         return m
@@ -263,10 +257,10 @@ class SemiGlobalAggregation(wiring.Component):
         with a constant P2)."""
         p = self.params
         if p.p2_adapt == P2_ADAPT_OFF:
-            return {path: Const(p.p2, bits_for(p.p2)) for path in PATHS}
+            return {path: Const(p.p2, bits_for(p.p2)) for path in SGM_PATHS}
         centre = self.guide[0]
         result = {}
-        for k, path in enumerate(PATHS, 1):
+        for k, path in enumerate(SGM_PATHS, 1):
             name = path.replace("-", "_")
             step = _register(m, absolute_difference(centre, self.guide[k]), 8,
                              f"sgm_step_{name}")
@@ -415,7 +409,7 @@ class SemiGlobalAggregation(wiring.Component):
                         "sgm_row_base_next")
         word_at = 4                 # address 2, read 3, the RAM's output register 4
         normalise = word_at + 4     # newest word, + P1, minimum of three
-        assert t.rows == normalise + 2, "plan.SGM_ROW_CLOCKS counts the same steps"
+        assert t.rows == normalise + 2, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
         memories, words = [], []
         for name, base, shape in (("top", own, unsigned(2 * word_bits)),
                                   ("top_right", nxt, unsigned(word_bits))):
@@ -437,7 +431,7 @@ class SemiGlobalAggregation(wiring.Component):
 
         minima, minima_write = self._row_minima(m, p2, normalise)
         results = {}
-        for path in ROW_PATHS:
+        for path in SGM_ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
             word = _lanes(newest[path], units, bits)                   # round j + 1 at 6 + j
             current = _lanes(_register(m, newest[path], word_bits, f"{name}_current"),
@@ -474,7 +468,7 @@ class SemiGlobalAggregation(wiring.Component):
                          write.en.eq(self._valid_at(t.rows))]
         # Their minima, once the last round's running minimum is complete.
         running = [self._running_min(m, results[path], t.rows,
-                                     f"sgm_{path.replace('-', '_')}_m") for path in ROW_PATHS]
+                                     f"sgm_{path.replace('-', '_')}_m") for path in SGM_ROW_PATHS]
         m.d.comb += [
             minima_write.addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),
             minima_write.data.eq(Cat(*running)),
@@ -499,12 +493,12 @@ class SemiGlobalAggregation(wiring.Component):
         read, write = memory.read_port(domain="sync"), memory.write_port()
         m.d.comb += read.addr.eq(_register(m, Mux(x == p.width - 1, 0, x + 1),
                                            range(p.width), "sgm_minima_address"))
-        word = dict(zip(ROW_PATHS, _lanes(_register(m, read.data, 3 * bits,
+        word = dict(zip(SGM_ROW_PATHS, _lanes(_register(m, read.data, 3 * bits,
                                                     "sgm_minima_word"), 3, bits)))
         # Column x + 1 for top-right now; for top as column x of the next position; for
         # top-left as column x - 1 two positions on.
         used = {path: Signal(bits, name=f"sgm_m_{path.replace('-', '_')}", reset_less=True)
-                for path in ROW_PATHS}
+                for path in SGM_ROW_PATHS}
         top_next = Signal(bits, name="sgm_m_top_next", reset_less=True)
         top_left_next = [Signal(bits, name=f"sgm_m_top_left_next{k}", reset_less=True)
                          for k in range(2)]
@@ -515,7 +509,7 @@ class SemiGlobalAggregation(wiring.Component):
                          top_left_next[1].eq(top_left_next[0]),
                          top_left_next[0].eq(word["top-left"])]
         result = {}
-        for path in ROW_PATHS:
+        for path in SGM_ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
             bound = _register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
                               bits + 1, f"{name}_bound")

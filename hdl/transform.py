@@ -10,7 +10,7 @@ raster order without the centre, as in the golden model.
 Census and rank can instead take the window unmasked with a ``keep`` flag per pixel
 (``mask_after``): a neighbour outside the frame is 0, and 0 < centre is centre != 0, so
 the comparison's bit is chosen after it (the A windows of a column then share one
-window of pixels, see :func:`~.plan.masks_after_compare`).
+window of pixels, see :func:`~.plan_structure.masks_after_compare`).
 
 Each component computes one window per ``en``-high clock; pipeline registers (see
 :mod:`.trees`) advance only while ``en`` is high, and ``latency`` counts them.
@@ -20,8 +20,9 @@ from amaranth.hdl import Cat, Module, Mux, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import TRANSFORM_SPECS, check_transform_table
 from .common import absolute_difference, delay
-from .plan import census_registers_compared, transform_plan
+from .plan_structure import census_registers_compared, transform_plan
 from .trees import DEFAULT_EVERY, build_popcount, build_sad
 
 __all__ = ["xi", "Rank", "Census", "ExtRank", "ExtCensus", "Transform"]
@@ -38,8 +39,10 @@ def xi(centre, neighbour):
 
 
 def _check_mask_after(params, mask_after):
-    if mask_after and params.transform not in ("census", "rank"):
-        raise ValueError(f"mask_after is for census and rank, not {params.transform}")
+    if mask_after and not params.spec.compares:
+        comparing = [name for name, spec in TRANSFORM_SPECS.items() if spec.compares]
+        raise ValueError(f"mask_after is for the transforms of comparisons "
+                         f"({', '.join(comparing)}), not {params.transform}")
 
 
 class _WindowTransform(wiring.Component):
@@ -54,7 +57,7 @@ class _WindowTransform(wiring.Component):
         combinationally (latency 0).
     copies : int
         Copies of the centre pixel the caller gives in ``centres`` (registers of their
-        own, see :func:`~.plan.centre_copies`); neighbour n is compared with copy
+        own, see :func:`~.plan_structure.centre_copies`); neighbour n is compared with copy
         n * copies // k. With 1 the centre is taken from the window.
     mask_after : bool
         Census and rank only: the window arrives unmasked, with ``keep``.
@@ -75,7 +78,7 @@ class _WindowTransform(wiring.Component):
         _check_mask_after(params, mask_after)
         self.params, self.every = params, every
         self.copies, self.mask_after = copies, mask_after
-        #: Register plan (:func:`~.plan.transform_plan`): where the registers go.
+        #: Register plan (:func:`~.plan_structure.transform_plan`): where the registers go.
         self.plan = transform_plan(params, every, mask_after)
         self.latency = sum(self.plan)
         members = {"window": In(data.ArrayLayout(unsigned(8), params.block * params.block))}
@@ -168,7 +171,10 @@ class ExtCensus(_WindowTransform):
                      self.latency, "ext_census")
 
 
-_TRANSFORMS = {"rank": Rank, "census": Census, "ext-rank": ExtRank, "ext-census": ExtCensus}
+#: The components of the transforms by transform name.
+_TRANSFORMS = check_transform_table(
+    {"rank": Rank, "census": Census, "ext-rank": ExtRank, "ext-census": ExtCensus},
+    "hdl.transform._TRANSFORMS")
 
 
 class Transform(wiring.Component):

@@ -1,4 +1,5 @@
-"""Pipelined reduction trees: adder tree, popcount, minimum with argmin.
+"""Pipelined reduction trees: adder tree, popcount, sum of absolute differences, minimum
+with argmin, as functions that build them into a module.
 
 A reduction of n values is a binary tree of ceil(log2 n) levels. To keep the clock rate flat
 in the block size (the paper's 19 x 19 census popcounts 360 bits), a register stage sits
@@ -15,17 +16,14 @@ counted against the same spacing through ``depth``, so that a register stage nev
 behind more than ``every`` levels of logic.
 """
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, unsigned
-from amaranth.lib import data, wiring
-from amaranth.lib.wiring import In, Out
+from amaranth.hdl import Cat, Const, Mux, Signal, Value
 
 from .common import better
 
 __all__ = ["DEFAULT_EVERY", "PAIRED_ADDER_BITS", "tree_levels", "register_plan", "popcount_plan",
            "build_tree", "build_sum", "build_popcount", "sad_leaves", "sad_plan", "build_sad",
            "compress_three", "sad_leaf_count",
-           "select_min", "min_tree_latency", "build_min_tree", "full_adder_compress",
-           "AdderTree", "PopCount", "MinTree"]
+           "select_min", "min_tree_latency", "build_min_tree", "full_adder_compress"]
 
 #: Register stage after every 2 levels: two short ripple adders (ECP5 CCU2C chains) plus
 #: routing fit the 6.67 ns of 150 MHz; nextpnr places the 19 x 19 census cost at 177 MHz
@@ -304,124 +302,3 @@ def build_min_tree(m, en, leaves, split=True, name="min", compare=None):
             paired.append(_register(m, en, [chosen], f"{name}{level}_{i}_min")[0])
         items = paired
     return items[0]
-
-
-class AdderTree(wiring.Component):
-    """Sum of ``count`` unsigned values of ``width`` bits.
-
-    Parameters
-    ----------
-    count, width : int
-        Number and width of the summands.
-    every : int
-        Register stage after every ``every`` adder levels; 0 for a combinational tree.
-
-    Attributes
-    ----------
-    inputs : In(ArrayLayout(unsigned(width), count))
-    en : In(1)
-        Advances the register stages.
-    sum : Out(unsigned)
-        Wide enough for ``count * (2**width - 1)``.
-    latency : int
-        Register stages between ``inputs`` and ``sum``.
-    """
-
-    def __init__(self, count, width, every=DEFAULT_EVERY):
-        self.count, self.width = count, width
-        self.plan = register_plan(count, every)
-        self.latency = sum(self.plan)
-        super().__init__({
-            "inputs": In(data.ArrayLayout(unsigned(width), count)),
-            "en": In(1),
-            "sum": Out(unsigned((count * (2 ** width - 1)).bit_length())),
-        })
-
-    def elaborate(self, platform):
-        m = Module()
-        values = [self.inputs[i] for i in range(self.count)]
-        m.d.comb += self.sum.eq(build_sum(m, self.en, values, self.plan))
-        return m
-
-
-class PopCount(wiring.Component):
-    """Number of ones in a ``width``-bit vector (full adders, then an adder tree).
-
-    Parameters
-    ----------
-    width : int
-        Input width.
-    every : int
-        Register spacing in levels; the compressor level counts as one.
-
-    Attributes
-    ----------
-    bits : In(width)
-    en : In(1)
-    count : Out(unsigned(bitlen(width)))
-    latency : int
-    """
-
-    def __init__(self, width, every=DEFAULT_EVERY):
-        self.width_in = width
-        self.plan = popcount_plan(width, every)
-        self.latency = sum(self.plan)
-        super().__init__({
-            "bits": In(width),
-            "en": In(1),
-            "count": Out(unsigned(width.bit_length())),
-        })
-
-    def elaborate(self, platform):
-        m = Module()
-        bits = [self.bits[i] for i in range(self.width_in)]
-        m.d.comb += self.count.eq(build_popcount(m, self.en, bits, self.plan))
-        return m
-
-
-class MinTree(wiring.Component):
-    """Minimum of ``count`` values and the index of the minimum, ties to the lowest index.
-
-    Each node compares a lower-index and an upper-index candidate and keeps the upper one
-    only if it is strictly smaller, so equal minima resolve to the lowest index exactly as
-    a strict ``<`` scan in increasing order does (the golden WTA rule).
-
-    Parameters
-    ----------
-    count, width : int
-        Number and width of the values.
-    every : int
-        Register stage after every ``every`` comparator levels; 0 for combinational.
-    split : bool
-        Instead: every level in two clocks (:func:`build_min_tree`), as the core's.
-
-    Attributes
-    ----------
-    values : In(ArrayLayout(unsigned(width), count))
-    en : In(1)
-    min : Out(unsigned(width))
-    index : Out(unsigned(max(1, bitlen(count - 1))))
-    latency : int
-    """
-
-    def __init__(self, count, width, every=DEFAULT_EVERY, split=False):
-        self.count, self.width, self.split = count, width, split
-        self.plan = register_plan(count, every)
-        self.latency = min_tree_latency(count) if split else sum(self.plan)
-        super().__init__({
-            "values": In(data.ArrayLayout(unsigned(width), count)),
-            "en": In(1),
-            "min": Out(unsigned(width)),
-            "index": Out(unsigned(max(1, (count - 1).bit_length()))),
-        })
-
-    def elaborate(self, platform):
-        m = Module()
-        index_shape = self.index.shape()
-        leaves = [(self.values[i], Const(i, index_shape)) for i in range(self.count)]
-        if self.split:
-            value, index = build_min_tree(m, self.en, leaves)
-        else:
-            value, index = build_tree(m, self.en, leaves, select_min, self.plan)
-        m.d.comb += [self.min.eq(value), self.index.eq(index)]
-        return m

@@ -37,23 +37,36 @@ def xi(p, q):
     return 1 if p > q else 0
 
 
+def _rank(p, neighbours):              # Eq. 2
+    return sum(xi(p, q) for q in neighbours)
+
+
+def _census(p, neighbours):            # Eq. 4
+    return tuple(xi(p, q) for q in neighbours)
+
+
+def _ext_rank(p, neighbours):          # Eq. 7
+    return sum(abs(p - q) for q in neighbours)
+
+
+def _ext_census(p, neighbours):        # Eq. 8
+    return tuple(abs(p - q) for q in neighbours)
+
+
+#: The transformed value of a pixel from its value and its neighbours' (in their order),
+#: by transform name.
+TRANSFORMS = {"rank": _rank, "census": _census, "ext-rank": _ext_rank,
+              "ext-census": _ext_census}
+
+
 def transform_pixel(image, x, y, name, block):
     """The transformed value of pixel (x, y): an int (rank, ext-rank) or a tuple (vectors).
 
     census is the tuple of comparison bits and ext-census the tuple of absolute differences,
     both indexed by neighbour number n.
     """
-    p = pixel(image, x, y)
     neighbours = [pixel(image, x + dx, y + dy) for dx, dy in window_offsets(block)]
-    if name == "rank":        # Eq. 2
-        return sum(xi(p, q) for q in neighbours)
-    if name == "census":      # Eq. 4
-        return tuple(xi(p, q) for q in neighbours)
-    if name == "ext-rank":    # Eq. 7
-        return sum(abs(p - q) for q in neighbours)
-    if name == "ext-census":  # Eq. 8
-        return tuple(abs(p - q) for q in neighbours)
-    raise ValueError(name)
+    return TRANSFORMS[name](pixel(image, x, y), neighbours)
 
 
 def transform_image(image, name, block):
@@ -63,15 +76,26 @@ def transform_image(image, name, block):
             for y in range(height)]
 
 
+def _absolute(left_value, right_value):        # Eq. 3
+    return abs(left_value - right_value)
+
+
+def _hamming(left_value, right_value):         # Eq. 5
+    return sum(1 for a, b in zip(left_value, right_value) if a != b)
+
+
+def _byte_differences(left_value, right_value):  # Eq. 9
+    return sum(abs(a - b) for a, b in zip(left_value, right_value))
+
+
+#: Matching costs of two transformed pixels, by transform name.
+COSTS = {"rank": _absolute, "census": _hamming, "ext-rank": _absolute,
+         "ext-census": _byte_differences}
+
+
 def cost(left_value, right_value, name):
     """Matching cost of two transformed pixels (Eq. 3, 5, 9)."""
-    if name in ("rank", "ext-rank"):
-        return abs(left_value - right_value)
-    if name == "census":  # Hamming distance
-        return sum(1 for a, b in zip(left_value, right_value) if a != b)
-    if name == "ext-census":
-        return sum(abs(a - b) for a, b in zip(left_value, right_value))
-    raise ValueError(name)
+    return COSTS[name](left_value, right_value)
 
 
 def cost_volume(left, right, name, block, disparities):

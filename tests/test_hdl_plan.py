@@ -1,10 +1,11 @@
-"""``hdl/plan.py``: the hardware facts, checked against the elaborated hardware.
+"""``hdl/plan*.py``: the hardware facts, checked against the elaborated hardware.
 
 The cycles per frame against the frame period measured in Amaranth's simulator (frames
-back to back), the latency against the flush after a lone frame; the output word width against the core's port and the generated Verilog; the
-size limits of :func:`check_buildable`. (The memory bits are checked against Yosys in
-``tests/test_report.py``, the units' latencies by the stream comparisons of
-``tests/test_hdl_units.py``, which align outputs by them.)
+back to back), the latency against the flush after a lone frame (and broken variants of
+its formula against the same flush); the output word width against the core's port and the
+generated Verilog; the size limits of :func:`check_buildable`. (The memory bits are checked
+against Yosys in ``tests/test_report.py``, the units' latencies by the stream comparisons
+of ``tests/test_hdl_units.py``, which align outputs by them.)
 """
 
 import re
@@ -13,7 +14,7 @@ import pytest
 from amaranth.hdl import Fragment
 from amaranth.sim import Simulator
 
-from npstereo.hdl import plan
+from npstereo.hdl import plan, plan_structure, plan_timing
 from npstereo.hdl.core import NpStereoCore
 from npstereo.hdl.verilog import core_verilog
 from npstereo.params import ParameterError, StereoParams
@@ -56,7 +57,7 @@ def measured_flush(params):
 
     async def bench(ctx):
         index = 0
-        for clock in range(len(beats) * params.rounds + 40 * plan.latency(params)
+        for clock in range(len(beats) * params.rounds + 40 * plan_timing.latency(params)
                            * params.rounds):
             offering = index < len(beats)
             if offering:
@@ -90,7 +91,8 @@ def measured_flush(params):
 def test_cycles_per_frame_is_the_measured_period(params):
     """Frames back to back: W x H x R clocks each, no flush between them."""
     params = params.with_size(24, 6)
-    assert measured_period(params) == plan.cycles_per_frame(params) == 24 * 6 * params.rounds
+    assert measured_period(params) == plan_timing.cycles_per_frame(params) == \
+        24 * 6 * params.rounds
 
 
 @pytest.mark.parametrize("params", PERIODS, ids=lambda p: p.describe().replace(" ", "_"))
@@ -99,15 +101,32 @@ def test_latency_is_the_measured_flush(params):
     last word leaves ``latency`` positions and the output offset later."""
     params = params.with_size(24, 6)
     flush, output = measured_flush(params)
-    assert flush == plan.latency(params) * params.rounds + output
+    assert flush == planned_flush(params, output)
 
 
-def test_a_wrong_latency_fails_the_flush_check():
-    """Broken variant: the flush one position shorter (or longer) is not what is measured."""
+def planned_flush(params, output):
+    """The flush in clocks that ``plan_timing.latency`` says: a position every R clocks."""
+    return plan_timing.latency(params) * params.rounds + output
+
+
+#: Broken variants of ``plan_timing.latency``, each wrong in one term: a row of W
+#: positions instead of W + 1 (the window's column lag left out), the aggregation's lag
+#: left out, the L/R check's D positions left out.
+BROKEN_LATENCIES = {
+    "rows of W": lambda p: (p.radius + p.agg_radius) * p.width + p.disparities,
+    "no aggregation lag": lambda p: p.radius * (p.width + 1) + p.disparities,
+    "no L/R wait": lambda p: (p.radius + p.agg_radius) * (p.width + 1),
+}
+
+
+def test_a_broken_latency_fails_the_flush_check(monkeypatch):
+    """The check of the flush fails for each broken variant of the formula."""
     params = PERIODS[1].with_size(24, 6)
     flush, output = measured_flush(params)
-    for wrong in (plan.latency(params) - 1, plan.latency(params) + 1):
-        assert flush != wrong * params.rounds + output
+    for broken in BROKEN_LATENCIES.values():
+        with monkeypatch.context() as patch:
+            patch.setattr(plan_timing, "latency", broken)
+            assert flush != planned_flush(params, output)
 
 
 @pytest.mark.parametrize("disparities,width", [(2, 8), (128, 8), (129, 16), (256, 16)])
@@ -116,7 +135,7 @@ def test_output_width_is_the_port_width(disparities, width):
     params = StereoParams(transform="rank", block=3, disparities=disparities,
                           rounds=disparities, lr_threshold=None, width=disparities + 2,
                           height=2)
-    assert plan.output_width(params) == width
+    assert plan_structure.output_width(params) == width
     core = NpStereoCore(params)
     Fragment.get(core, None)
     assert len(core.m_axis_tdata) == width

@@ -21,7 +21,7 @@ from amaranth.lib import memory
 from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
-from npstereo.hdl import calculation_stage, plan
+from npstereo.hdl import calculation_stage, plan, plan_memories, plan_timing
 from npstereo.hdl import sgm as hdl_sgm
 from npstereo.hdl.core import NpStereoCore
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
@@ -100,7 +100,7 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
     clocks = [(slot, j) for slot in slots for j in range(rounds)]
     fill = random_memories(monkeypatch, seed)
     dut = SemiGlobalAggregation(params)
-    assert dut.latency == plan.aggregation_latency(params)
+    assert dut.latency == plan_timing.aggregation_latency(params)
     latency, got = dut.latency, {}
 
     async def testbench(ctx):
@@ -283,7 +283,7 @@ def test_broken_missing_pair_cost_is_caught(monkeypatch):
                                                 (7, 7), (5, None)])
 def test_minimum_rounds(disparities, rounds):
     """R >= ceil(log2(D/R)) + 6: the smallest divisor of D that fits."""
-    assert plan.sgm_min_rounds(disparities) == rounds
+    assert plan_timing.sgm_min_rounds(disparities) == rounds
 
 
 @pytest.mark.parametrize("disparities,rounds,message", [
@@ -302,7 +302,7 @@ def test_too_few_rounds_are_refused(disparities, rounds, message):
     with pytest.raises(ParameterError, match="needs rounds"):
         NpStereoCore(params)
     # The smallest R that fits is built.
-    enough = plan.sgm_min_rounds(disparities)
+    enough = plan_timing.sgm_min_rounds(disparities)
     if enough is not None:
         plan.check_buildable(params.replace(rounds=enough))
 
@@ -312,8 +312,12 @@ def test_sgm_memories_within_the_budget():
     costs, 3 x 450 x 7 of minima, two stores of 10 words, and all of SGM's memory beside
     the box configuration's under 1 Mibit."""
     params = sgm_params("census", 7, 100, 10, width=450, height=375)
-    kinds = {memory.name: memory.bits for memory in plan.sgm_memories(params)}
+    kinds = {memory.name: memory.bits for memory in plan_memories.sgm_memories(params)}
     assert kinds == {"path rows (top, top-left)": 630_000, "path rows (top-right)": 315_000,
                      "path minima": 9_450, "left path store": 700, "top-left store": 700}
     box = params.replace(aggregation=3, p1=None, p2=None, p2_adapt=None)
-    assert plan.memory_bits(params) - plan.memory_bits(box) < 1 << 20
+    assert plan_memories.memory_bits(params) - plan_memories.memory_bits(box) < 1 << 20
+    # Counterpart: one more step of P2 makes the path cost 8 bits, and the rows of path
+    # costs with their minima alone would hold more than 1 Mibit.
+    wider = plan_memories.sgm_memories(params.replace(p2=params.p2 + 1))
+    assert sum(memory.bits for memory in wider if memory.name.startswith("path")) > 1 << 20

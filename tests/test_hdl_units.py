@@ -19,14 +19,15 @@ from npstereo.golden import matching_cost as golden_cost
 from npstereo.golden import transform as golden_transform
 from npstereo.hdl import aggregation as hdl_aggregation
 from npstereo.hdl import matching_cost as hdl_cost
-from npstereo.hdl import plan
+from npstereo.hdl import plan_structure, plan_timing
 from npstereo.hdl import transform as hdl_transform
 from npstereo.hdl import trees
 from npstereo.hdl.aggregation import Aggregation
 from npstereo.hdl.matching_cost import MatchingCost
 from npstereo.hdl.transform import Transform
-from npstereo.hdl.trees import AdderTree, MinTree, PopCount
 from npstereo.params import TRANSFORMS, StereoParams
+
+from hdl_trees import AdderTree, MinTree, PopCount
 
 
 def run_stream(dut, inputs, apply, read, expected, seed, en_probability=0.6, garbage=None):
@@ -211,7 +212,8 @@ def test_transform_masking_after_compare_matches_golden(transform, block, every)
 
 @pytest.mark.parametrize("transform", ["ext-rank", "ext-census"])
 def test_transform_masking_after_compare_is_for_bitwise_transforms(transform):
-    with pytest.raises(ValueError, match=f"mask_after is for census and rank, not {transform}"):
+    with pytest.raises(ValueError, match=rf"mask_after is for the transforms of comparisons "
+                                         rf"\(rank, census\), not {transform}"):
         Transform(StereoParams(transform=transform, block=3), mask_after=True)
 
 
@@ -510,11 +512,11 @@ def check_aggregation(params, seed, bubbles=0.3):
     clocks = [(slot, j) for slot in slots for j in range(rounds)]
     dut = Aggregation(params)
     latency = dut.latency
-    skews = plan.unit_skews(params)
-    assert latency == plan.aggregation_latency(params) + skews[-1]
+    skews = plan_timing.unit_skews(params)
+    assert latency == plan_timing.aggregation_latency(params) + skews[-1]
     got = {}
     # The units' costs of each clock; unit i takes its own s_i clocks late (the skew of the
-    # cost units, :func:`npstereo.hdl.plan.unit_skews`).
+    # cost units, :func:`npstereo.hdl.plan_timing.unit_skews`).
     given = []
 
     async def testbench(ctx):
@@ -567,7 +569,7 @@ def test_aggregation_matches_golden(transform, aggregation, disparities, rounds,
 
 def test_broken_aggregation_row_mask_is_caught(monkeypatch):
     """Rows above the frame not masked: the previous frame's rows leak into the sums."""
-    monkeypatch.setattr(hdl_aggregation, "_row_inside", lambda y, above, height: 1)
+    monkeypatch.setattr(hdl_aggregation, "_row_above_inside", lambda y, above, height: 1)
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="costs"), seed=1)
@@ -586,10 +588,10 @@ def test_aggregation_cost_banks_match_golden(monkeypatch, rounds):
     """A cost line buffer of several banks (W*R = 18 or 27 words in banks of 8): every
     bank's words, the shorter last bank's too, come back from the bank they were written
     to."""
-    monkeypatch.setattr(plan, "COST_BANK", 8)
+    monkeypatch.setattr(plan_structure, "COST_BANK", 8)
     params = StereoParams(transform="census", block=3, disparities=6, rounds=rounds,
                           width=9, height=6, line_buffer="costs")
-    assert len(plan.cost_banks(params)) == (3 if rounds == 2 else 4)
+    assert len(plan_structure.cost_banks(params)) == (3 if rounds == 2 else 4)
     check_aggregation(params, seed=rounds)
 
 
@@ -597,17 +599,17 @@ def test_aggregation_cost_banks_match_golden(monkeypatch, rounds):
 def test_aggregation_bank_choice_in_levels_matches_golden(monkeypatch, bank, levels):
     """More banks than one clock's choice (W*R = 18 words in banks of 2 or 1: 9 or 18
     banks): the choice in registered levels, the word a clock later per level."""
-    monkeypatch.setattr(plan, "COST_BANK", bank)
+    monkeypatch.setattr(plan_structure, "COST_BANK", bank)
     params = StereoParams(transform="census", block=3, disparities=6, rounds=2, width=9,
                           height=6, line_buffer="costs")
-    assert plan.bank_choice_levels(params) == levels
-    assert plan.vertical_read(params) == plan.VERTICAL_READ + levels - 1
+    assert plan_structure.bank_choice_levels(params) == levels
+    assert plan_timing.vertical_read(params) == plan_timing.VERTICAL_READ + levels - 1
     check_aggregation(params, seed=levels)
 
 
 def test_broken_aggregation_bank_choice_level_is_caught(monkeypatch):
     """The second level's digit a clock early: words from the group of the next address."""
-    monkeypatch.setattr(plan, "COST_BANK", 2)
+    monkeypatch.setattr(plan_structure, "COST_BANK", 2)
     real_pipe = hdl_aggregation.pipe
 
     def early(m, value, steps, name, reset=False):
@@ -621,7 +623,7 @@ def test_broken_aggregation_bank_choice_level_is_caught(monkeypatch):
 
 def test_broken_aggregation_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words come from the bank of the next address."""
-    monkeypatch.setattr(plan, "COST_BANK", 8)
+    monkeypatch.setattr(plan_structure, "COST_BANK", 8)
     real_pipe = hdl_aggregation.pipe
 
     def early(m, value, steps, name, reset=False):

@@ -23,7 +23,7 @@ from npstereo.gen.paper_resources import paper_configurations, sweep_targets
 from npstereo.gen.plots import sweep_plots
 from npstereo.gen.report_tables import format_table, sweep_markdown
 from npstereo.gen.synth import synthesise, tool_versions
-from npstereo.hdl import plan
+from npstereo.hdl import plan, plan_memories
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import StereoParams
 
@@ -132,8 +132,12 @@ MEMORY_SHAPES = [
 
 
 def _wrong_memory_bits(params):
-    """Broken variant of the formula: line buffers of B rows instead of B - 1."""
-    return plan.memory_bits(params) + 2 * params.width * 8
+    """Broken variant of the formula: line buffers of B rows instead of B - 1 (the
+    window's rows, not the rows above the newest)."""
+    rows = plan_memories.window_rows
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(plan_memories, "window_rows", lambda p: rows(p) + 1)
+        return plan.memory_bits(params)
 
 
 @pytest.mark.parametrize("params", MEMORY_SHAPES, ids=lambda p: p.describe().replace(" ", "_"))

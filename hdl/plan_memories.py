@@ -1,0 +1,90 @@
+"""The memories of the core, as pure functions of the parameters.
+
+What the components build, kind by kind (docs/hardware.md, "Memories"): ``npstereo report``
+compares their bits with what Yosys infers (``tests/test_report.py``).
+"""
+
+from dataclasses import dataclass
+
+from .common import tag_layout
+from .plan_structure import (cost_banks, cost_rows, output_width, store_slices,
+                             vertical_bits, window_rows)
+from .plan_timing import core_timing, lr_timing
+from .trees import DEFAULT_EVERY
+
+__all__ = ["MemoryUse", "memories", "memory_bits", "sgm_memories"]
+
+
+@dataclass(frozen=True)
+class MemoryUse:
+    """One kind of memory of the core: ``count`` memories of ``depth`` words of ``width``
+    bits, and what holds them (a use of memory, not Amaranth's ``Memory``)."""
+    name: str
+    count: int
+    depth: int
+    width: int
+
+    @property
+    def bits(self):
+        return self.count * self.depth * self.width
+
+
+def memories(params, every=DEFAULT_EVERY):
+    """Every memory of the core for ``params`` (with width and height), as the components
+    build them (docs/hardware.md, "Memories")."""
+    p = params
+    units, rounds, a = p.per_round, p.rounds, p.agg_radius
+    result = [MemoryUse("input lines", 2, p.width, 8 * (window_rows(p) - 1))]
+    rows = cost_rows(p)
+    if rows > 1 and p.stored_rows == "transforms":
+        result.append(MemoryUse("transform lines", 1, p.width,
+                                2 * (rows - 1) * p.transform_bits))
+    if a and p.stored_rows == "costs":
+        banks = cost_banks(p)
+        for depth in sorted(set(banks), reverse=True):
+            result.append(MemoryUse("cost lines", units * banks.count(depth), depth,
+                                    (p.aggregation - 1) * p.cost_bits))
+    if p.is_sgm:
+        result += sgm_memories(p)
+    if rounds > 1:
+        widths = store_slices(rows * p.transform_bits)
+        for width in sorted(set(widths)):
+            result.append(MemoryUse("right-transform stores", units * widths.count(width),
+                                    rounds, width))
+        if a:
+            result.append(MemoryUse("row taps", units, rounds, 2 * a * vertical_bits(p)))
+    if p.lr_check:
+        d_bits = max(1, (p.disparities - 1).bit_length())
+        timing = core_timing(p, every)
+        history = lr_timing(p, timing.left - timing.sums).history
+        if rounds > 1:
+            result.append(MemoryUse("right winners", units, rounds,
+                                    p.aggregated_cost_bits + d_bits + 1))
+        result.append(MemoryUse("left winners", 1, history, tag_layout(p).size + d_bits))
+        result.append(MemoryUse("dR history", 1, history, d_bits))
+    depth = core_timing(p, every).queue_depth
+    result.append(MemoryUse("output queue", 1, depth - 1, output_width(p) + 2))
+    return result
+
+
+def memory_bits(params, every=DEFAULT_EVERY):
+    """Bits the core's memories hold (what Yosys counts in its ``$mem_v2`` cells)."""
+    return sum(memory.bits for memory in memories(params, every))
+
+
+def sgm_memories(params):
+    """The SGM stage's memories (docs/hardware.md, "Memories").
+
+    Block RAM: the previous row's path costs, one word per (column, round) of D/R values,
+    top and top-left in one memory (both read the position's own column), top-right in
+    another (it reads the next column); the three paths' minima, one word per column.
+    LUT RAM: the left path's a(x, d) and the top-left words held for the next position,
+    one word per round each.
+    """
+    p = params
+    word = p.per_round * p.path_cost_bits
+    return [MemoryUse("path rows (top, top-left)", 1, p.width * p.rounds, 2 * word),
+            MemoryUse("path rows (top-right)", 1, p.width * p.rounds, word),
+            MemoryUse("path minima", 1, p.width, 3 * p.path_cost_bits),
+            MemoryUse("left path store", 1, p.rounds, word),
+            MemoryUse("top-left store", 1, p.rounds, word)]

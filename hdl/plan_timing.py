@@ -1,0 +1,327 @@
+"""When the hardware does what, as pure functions of the parameters.
+
+The clock offsets of the stages, which the components take for their ``latency`` attributes
+and their internal timing, and what follows from them for the whole core: its latency in
+positions (the flush), its cycles per frame, its output queue's depth. Offsets are clocks
+after a slot's first clock (its admission, see :mod:`.core`); a value *at* an offset is
+slot-aligned there (see :mod:`.common`). ``tests/test_hdl_plan.py`` measures them on the
+elaborated hardware.
+"""
+
+from dataclasses import dataclass
+
+from ..params import SGM_PATH_COUNT
+from .plan_structure import (bank_choice_levels, cost_plan, cost_rows, horizontal_plan,
+                             masks_after_compare, row_sum_plan, transform_plan, vertical_plan)
+from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
+
+__all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
+           "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
+           "CalculationTiming", "calculation_timing", "SGM_LOOP_CLOCKS", "sgm_tree_clocks",
+           "sgm_min_rounds", "SgmTiming", "sgm_timing", "evaluation_latency", "LR_STAGE_A",
+           "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
+           "cycles_per_frame"]
+
+
+# The input stage ----------------------------------------------------------------------
+
+#: Clocks from the admission of a pixel to the window: the line buffers' block RAM read,
+#: its output register, the window's shift, the masked window's register, a second
+#: register of the window and the centres' copies.
+INPUT_LATENCY = 5
+
+
+# The calculation stage and the box aggregation ----------------------------------------
+
+#: Largest skew between the first and the last cost unit with R = 1 (see :func:`unit_skews`).
+MAX_SKEW_ONE_ROUND = 7
+
+
+def unit_skews(params):
+    """Clocks by which each cost unit runs behind unit 0: the units form a systolic chain.
+
+    Unit i takes its left operand from unit i - 1's register and its right-image words
+    from unit i - 1's operand register, so no operand is broadcast to all units and no
+    store's read feeds another store's write. Neighbouring units differ by 0 or 1 clock:
+    s_i = i S // (D/R - 1). With R >= 2 the last unit's words go round to unit 0 for its
+    next round, which needs S <= R - 1; with R = 1 nothing goes round, and S is kept small
+    (:data:`MAX_SKEW_ONE_ROUND`) because re-aligning the units' results costs
+    S - s_i registers per unit. Units with equal skew share their left operand.
+    """
+    units = params.per_round
+    if units == 1:
+        return (0,)
+    top = min(units - 1, params.rounds - 1 if params.rounds > 1 else MAX_SKEW_ONE_ROUND)
+    return tuple(i * top // (units - 1) for i in range(units))
+
+
+#: Clocks until the rows of a vertical sum from stored costs are there with the bank
+#: chosen in one level (:func:`bank_choice_levels`): the address register, the block RAM
+#: read, each bank's output register, the bank's choice, then the read register. Each
+#: further level of the choice adds a clock (:func:`vertical_read`).
+VERTICAL_READ = 5
+
+
+def vertical_read(params):
+    """Clocks until the rows of a vertical sum from stored costs are there."""
+    return VERTICAL_READ + bank_choice_levels(params) - 1
+
+
+def vertical_clocks(params, every=DEFAULT_EVERY):
+    """Clocks of the vertical sum from stored costs (``stored_rows == "costs"``), else 0."""
+    if not params.agg_radius or params.stored_rows != "costs":
+        return 0
+    return vertical_read(params) + sum(vertical_plan(params, every))
+
+
+def aggregation_latency(params, every=DEFAULT_EVERY):
+    """Clocks from the aggregation's input to its A x A sums (0 for A = 1), or to the
+    summed path costs of semi-global aggregation (:func:`sgm_timing`).
+
+    The vertical sum from stored costs (``stored_rows == "costs"``), then the horizontal
+    sum: the registered taps, then the tree of 2a + 1 terms. (The units' skew comes on
+    top, see :func:`calculation_timing`.)
+    """
+    if params.is_sgm:
+        return sgm_timing(params, every).latency
+    if not params.agg_radius:
+        return 0
+    return vertical_clocks(params, every) + 1 + sum(horizontal_plan(params, every))
+
+
+def min_tree_clocks(params):
+    """Clocks of the partition's WTA over D/R aggregated costs: two per level (the
+    comparison, registered with both candidates, then the choice of the whole (cost,
+    index) pair; see :func:`~.trees.build_min_tree`)."""
+    return min_tree_latency(params.per_round)
+
+
+@dataclass(frozen=True)
+class CalculationTiming:
+    """Offsets inside the calculation stage, in clocks after its input (the windows)."""
+    transformed: int    #: transforms (and the rows above) of a position, slot-aligned
+    stored: int         #: round 0 of unit 0's right-transform store read
+    costed: int         #: masked costs (row costs) of a round, unit 0
+    skew: int           #: clocks the last unit runs behind unit 0 (see unit_skews)
+    vertical: int       #: unit 0's costs or vertical sums at the aggregation's input
+                        #: (SGM: all units', re-aligned)
+    sums: int           #: aggregated sums of the aggregation centre
+    min_tree: int       #: clocks of the partition's minimum tree
+    latency: int        #: the partition winner (registered)
+
+
+def calculation_timing(params, every=DEFAULT_EVERY):
+    """The calculation stage's offsets (see :mod:`.calculation_stage`).
+
+    The transform units' results; with the rows above kept as transforms, the block RAM
+    of transformed rows is read in round 0 and its word passes the RAM's output register
+    and a fabric register, so the current row waits for it (at least 3 clocks). The
+    newest right word is written into
+    unit 0's store in the one clock of a slot that the words coming round from the last
+    unit leave free, and unit 0 reads it R - S clocks later (S: the last unit's skew), so
+    with R >= 2 the stores are read R - S clocks after the transforms. Unit 0's read
+    register precedes its cost unit; the cost masks take two registers (x - j*D/R, then one
+    comparison per unit), so at least 3 clocks pass from the stores to the masked costs.
+    With A rows the row costs are summed (registered); a single row's cost is registered
+    once; then unit i's result waits S - s_i clocks for the last unit's: before SGM, or
+    after the box sum (:class:`~.aggregation.Aggregation`).
+    """
+    transform_latency = sum(transform_plan(params, every, masks_after_compare(params)))
+    rows = cost_rows(params)
+    # At least a clock, so that unit 0's store write can be prepared a clock ahead.
+    transformed = max(transform_latency, 3 if rows > 1 and params.stored_rows == "transforms"
+                      else 1)
+    skew = unit_skews(params)[-1]
+    stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)
+    costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
+    vertical = costed + (sum(row_sum_plan(params, every)) if rows > 1 else 1)
+    # SGM takes the units' results re-aligned; the box sum takes them skewed and
+    # re-aligns its own.
+    vertical += skew if params.is_sgm else 0
+    sums = vertical + aggregation_latency(params, every) + (0 if params.is_sgm else skew)
+    min_tree = min_tree_clocks(params)
+    return CalculationTiming(transformed, stored, costed, skew, vertical, sums, min_tree,
+                             sums + min_tree + 1)
+
+
+# Semi-global aggregation (hdl/sgm.py) --------------------------------------------------
+
+#: Clocks of the left path's loop besides its minimum tree: the store's read register,
+#: C + a, the running minimum over the rounds, the minimum m, the materialised L, the next
+#: a, and its write into the store before the next position reads it. The loop closes in
+#: a slot of R clocks if R >= T + SGM_LOOP_CLOCKS (docs/hardware.md, "Semi-global
+#: aggregation").
+SGM_LOOP_CLOCKS = 6
+
+
+#: Clocks from the SGM stage's input to each path's P2: the intensity steps, then P2.
+SGM_GUIDE_CLOCKS = 2
+
+
+#: Where the left path reads a(x, d) of round 0 from its store (the address is a local
+#: round counter, a register).
+SGM_LEFT_READ = 1
+
+
+#: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the
+#: row address, its block RAM read address, the read, the RAM's output register, the
+#: top-left store's read register, the newest word's register (the next round's first
+#: value arrives), L + P1, the minimum of the three candidates, the normalisation, + C.
+SGM_ROW_CLOCKS = 10
+
+
+def sgm_tree_clocks(units):
+    """Registers of a minimum over ``units`` values: one per level (a comparison and the
+    multiplexer it drives fill a 150 MHz clock on ECP5)."""
+    return tree_levels(units)
+
+
+def sgm_min_rounds(disparities):
+    """Fewest rounds R dividing D for which the left path's loop fits a slot, or None.
+
+    R >= T + :data:`SGM_LOOP_CLOCKS` with T = ceil(log2(D/R)); both sides move the same
+    way with R, so every larger divisor fits too.
+    """
+    for rounds in range(1, disparities + 1):
+        if disparities % rounds == 0 and \
+                rounds >= sgm_tree_clocks(disparities // rounds) + SGM_LOOP_CLOCKS:
+            return rounds
+    return None
+
+
+@dataclass(frozen=True)
+class SgmTiming:
+    """Offsets inside the SGM stage, in clocks after its input (the round's costs).
+
+    Each is where round 0 of a position is; round j is j clocks later.
+    """
+    tree: int           #: T, registers of a minimum over the round's D/R values
+    guide: int          #: P2 of every path (slot-aligned)
+    left_read: int      #: the left path reads a(x, d) from its store
+    materialise: int    #: the left path's L(x, d) is formed (m(x - 1) is there)
+    left: int           #: L of the left path
+    rows: int           #: L of the paths from the row above
+    minima: int         #: their minima m(x) are written (the last round's running minimum)
+    latency: int        #: the summed costs S
+
+
+def sgm_timing(params, every=DEFAULT_EVERY):
+    """The SGM stage's offsets (see :mod:`.sgm`).
+
+    The left path reads a(x, d) at ``left_read``, registers C + a a clock later, and its
+    minimum over the round (T registers) and the running minimum over the rounds (one)
+    hold U(x) in the last round; m(x) follows a clock later, ``left_read + 3 + T + R``
+    clocks after the input, which is R clocks into the next position: that position forms
+    its L from m(x - 1) from ``left_read + 3 + T`` on (``materialise``). The paths from
+    above take :data:`SGM_ROW_CLOCKS`; the paths' L are summed by a tree
+    (registered as ``every`` says, and at its root).
+    """
+    tree = sgm_tree_clocks(params.per_round)
+    materialise = SGM_LEFT_READ + 3 + tree
+    left = materialise + 1
+    rows = SGM_ROW_CLOCKS
+    summed = max(left, rows) + sum(register_plan(SGM_PATH_COUNT, every, 0, True))
+    return SgmTiming(tree, SGM_GUIDE_CLOCKS, SGM_LEFT_READ, materialise, left, rows,
+                     rows + tree + params.rounds, summed)
+
+
+# Evaluation, L/R check, the whole core --------------------------------------------------
+
+def evaluation_latency(params):
+    """Clocks from the evaluation stage's input (round 0's partition winner) to the
+    position's winner, slot-aligned: the R winners of a slot are in a shift register
+    after round R-1, a minimum tree over them (:func:`~.trees.build_min_tree`), then the
+    winner's register."""
+    return params.rounds + min_tree_latency(params.rounds)
+
+
+#: Offset (after the L/R stage's input) where its units read their stores: the candidates'
+#: flags take two registers (x - j*D/R, then one comparison per unit).
+LR_STAGE_A = 2
+
+
+def lr_stage_b(params):
+    """Offset where the L/R check's units choose and write the running winner: a clock
+    after stage A, or two with R >= 3 (the word read is registered before it is
+    compared; the next unit reads that word again R clocks after it first did)."""
+    return LR_STAGE_A + (2 if params.rounds >= 3 else 1)
+
+
+@dataclass(frozen=True)
+class LRTiming:
+    """Offsets inside the L/R check, in clocks after its input (the aggregated sums)."""
+    left: int           #: where the left winners arrive (slot-aligned)
+    exit: int           #: a final dR leaves the last unit (0 without the check)
+    history: int        #: words of the left winners' store and of the dR history
+    latency: int        #: the retire pulse and the output word
+
+
+def lr_timing(params, left):
+    """The L/R check's offsets, for left winners arriving ``left`` clocks after the sums.
+
+    The last unit's stage B of round R-1 (:func:`lr_stage_b` + R - 1), then a register:
+    the final dR. Its check then takes 9 clocks (left winners' RAM, its output register and
+    a fabric register, the partner's address, the history RAM, its output register and a
+    fabric register, the two comparisons with the consistency bounds, the result). The
+    stores are indexed by position: the left side writes ``left`` clocks after the input,
+    the check reads at ``exit``; in between the left side runs ahead by up to
+    ceil((exit - left) / R) + 1 positions, and the history is read 4 clocks after
+    ``exit`` while up to 4 more positions write it.
+    """
+    if not params.lr_check:
+        return LRTiming(left, 0, 0, left + 1)
+    rounds = params.rounds
+    exit_ = lr_stage_b(params) + rounds
+    ahead = max(-(-(exit_ - left) // rounds) + 1, 0)
+    history = 1 << (params.disparities + ahead + 7 - 1).bit_length()
+    return LRTiming(left, exit_, history, exit_ + 9)
+
+
+@dataclass(frozen=True)
+class CoreTiming:
+    """Offsets of the stages' inputs, in clocks after a slot's admission."""
+    calculation: int    #: the windows (calculation stage's input)
+    sums: int           #: the aggregated sums (L/R check's input)
+    evaluation: int     #: the partition winners (evaluation stage's input)
+    left: int           #: the left winners (slot-aligned)
+    output: int         #: a position's retire pulse and word, before the output queue
+    queue_depth: int    #: words of the output queue
+
+
+def core_timing(params, every=DEFAULT_EVERY):
+    """The core's offsets, and the output queue's depth: every position in flight between
+    admission and the queue must find room for its word (a credit is taken at admission),
+    plus a few words so that a steady stream never waits for a credit."""
+    calculation = INPUT_LATENCY
+    timing = calculation_timing(params, every)
+    sums = calculation + timing.sums
+    evaluation = calculation + timing.latency
+    left = evaluation + evaluation_latency(params)
+    output = sums + lr_timing(params, left - sums).latency
+    depth = 1 << (-(-output // params.rounds) + 4).bit_length()
+    return CoreTiming(calculation, sums, evaluation, left, output, depth)
+
+
+def latency(params):
+    """Positions from a pixel's admission to the admission of the position that completes
+    its output word: the window's centre trails the newest pixel by r rows and r columns,
+    the aggregation centre the window's by a rows and a columns, and the L/R check waits
+    D positions (positions are raster-continuous, so a row is W of them).
+
+    After the last frame of a stream the core feeds this many dummy positions (the flush);
+    a frame that follows at once needs none (its own pixels push the previous one out).
+    """
+    p = params
+    lag = (p.radius + p.agg_radius) * (p.width + 1)
+    return lag + (p.disparities if p.lr_check else 0)
+
+
+def cycles_per_frame(params):
+    """Clocks per frame without stalls, frames back to back: W x H x R.
+
+    A frame that starts right after the previous one overlaps its flush (the input stage
+    keeps the finishing frame's coordinates for its last centres), so each frame costs
+    exactly its W x H slots. A frame after a pause (idle input) is flushed with
+    :func:`latency` dummy positions, which the pause covers.
+    """
+    return params.width * params.height * params.rounds
