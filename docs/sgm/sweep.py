@@ -36,7 +36,7 @@ import numpy as np
 from npstereo.golden import sgm
 from npstereo.golden.data import load_middlebury, read_image
 from npstereo.golden.degrade import gaussian_noise_pair
-from npstereo.params import StereoParams
+from npstereo.params import StereoParams, max_path_penalty
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
 
@@ -53,7 +53,7 @@ SEEDS = (0, 1, 2)
 
 
 def grid(spec, max_cost):
-    limit = sgm.max_path_penalty(max_cost)
+    limit = max_path_penalty(max_cost)
     for p1, p2, adapt in itertools.product(spec["p1"], spec["p2"], spec["adapt"]):
         if p1 <= p2 <= limit:
             yield p1, p2, adapt
@@ -122,7 +122,7 @@ def main(argv=None):
     if "other" in args.only:
         for transform, block in OTHER:
             cmax = StereoParams(transform=transform, block=block).max_cost
-            limit = sgm.max_path_penalty(cmax)
+            limit = max_path_penalty(cmax)
             configs = sorted({(max(1, round(f1 * cmax)), min(limit, round(f2 * cmax)), adapt)
                               for f1, f2 in OTHER_FRACTIONS for adapt in (None, 4)},
                              key=lambda c: (c[0], c[1], c[2] or 0))
