@@ -1,4 +1,4 @@
-"""The top level ``npstereo_core``: AXI4-Stream video in, disparities out.
+"""The whole core: pixel pairs in, disparities out, as ``amaranth.lib.stream`` streams.
 
 Chains :class:`~.input_stage.InputStage`, :class:`~.calculation_stage.CalculationStage`,
 :class:`~.evaluation_stage.EvaluationStage` and :class:`~.lr_check.LRCheck` (the order of
@@ -15,28 +15,32 @@ and a position is admitted only when the queue is sure to have room for its word
 counter: queue depth minus words queued minus positions in flight). So no signal fans out
 to every register, and no combinational path runs from one port to the other.
 
-Framing (see docs/semantics.md, "Hardware"): IDLE waits for a start of frame and drops
-pixels without one; FRAME takes W x H pixels checking ``tlast``; a framing error (a wrong
-``tlast``, a start of frame inside a frame) pulses ``framing_error`` and the rest of the
-frame is filled with zero pixels (FILL); FLUSH feeds dummy positions until the frame's last
+Framing (see docs/semantics.md, "Hardware"): IDLE waits for a start of frame (``first``)
+and drops pixels without one; FRAME takes W x H pixels checking ``last``; a framing error (a
+wrong ``last``, a start of frame inside a frame) pulses ``framing_error`` and the rest of
+the frame is filled with zero pixels (FILL); FLUSH feeds dummy positions until the frame's last
 output word is out, then IDLE again. A start of frame that is waiting at the beginning of a
 flush line is taken at once: the frames overlap in the pipeline (the input stage keeps the
 finishing frame's coordinates for its last centres), so back-to-back frames cost W x H
 slots each, with no flush between them.
+
+The payloads are :mod:`.stream`'s formats; :mod:`.verilog` wraps the core in the Verilog
+top level ``npstereo_core`` with AXI4-Stream port names.
 """
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal
-from amaranth.lib import data, wiring
+from amaranth.hdl import Const, Module, Mux, Signal
+from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
 
-from ..params import ParameterError
 from .calculation_stage import CalculationStage
 from .common import SlotClock, pipe
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
-from .plan import check_buildable, core_timing, latency, masks_after_compare, output_width
+from .plan import check_buildable, core_timing, latency, masks_after_compare
+from .stream import PixelPair, disparity_word, framed
+from .stream_parts import InputQueue, RegisterSlice
 from .trees import DEFAULT_EVERY
 
 __all__ = ["NpStereoCore"]
@@ -55,14 +59,18 @@ class NpStereoCore(wiring.Component):
     every : int
         Register spacing of the trees (see :mod:`.trees`).
 
-    Attributes
-    ----------
-    s_axis_tdata, s_axis_tvalid, s_axis_tready, s_axis_tuser, s_axis_tlast
-        Input stream, ``{right, left}`` pixels.
-    m_axis_tdata, m_axis_tvalid, m_axis_tready, m_axis_tuser, m_axis_tlast
-        Output stream, ``{valid, 0..., disparity}``.
+    Members
+    -------
+    sink : In(stream.Signature(framed(PixelPair)))
+        Pixel pairs in raster order, ``first`` on (0, 0), ``last`` on every line's end.
+    source : Out(stream.Signature(framed(disparity_word(params))))
+        One beat per input pixel in raster order (``data.disparity`` 0 where
+        ``data.valid`` is 0), with the input's ``first`` and ``last``.
     framing_error : Out(1)
         One-clock pulse per framing error (registered).
+
+    Attributes
+    ----------
     latency : int
         Positions from a pixel's admission to the position whose admission completes its
         output word: the flush after the last frame of a stream.
@@ -70,12 +78,14 @@ class NpStereoCore(wiring.Component):
         Clocks from the admission of that position to the word entering the output queue.
     """
 
+    def __new__(cls, params, *args, **kwargs):
+        # Refused before the object exists: a component that raises in __init__ is garbage
+        # that Amaranth reports as created but never used. ``src_loc_at`` keeps the report
+        # of a core really left unused at the caller's line.
+        check_buildable(params)
+        return super().__new__(cls, src_loc_at=1)
+
     def __init__(self, params, every=DEFAULT_EVERY):
-        try:
-            check_buildable(params)
-        except ParameterError:
-            self._MustUse__silence = True  # never elaborated: no "unused" warning
-            raise
         self.params = params
         timing = core_timing(params, every)
         self.input_stage = InputStage(params)
@@ -90,10 +100,8 @@ class NpStereoCore(wiring.Component):
         self.queue_depth = timing.queue_depth
         self.latency = latency(params)
         super().__init__({
-            "s_axis_tdata": In(16), "s_axis_tvalid": In(1), "s_axis_tready": Out(1),
-            "s_axis_tuser": In(1), "s_axis_tlast": In(1),
-            "m_axis_tdata": Out(output_width(params)), "m_axis_tvalid": Out(1),
-            "m_axis_tready": In(1), "m_axis_tuser": Out(1), "m_axis_tlast": Out(1),
+            "sink": In(stream.Signature(framed(PixelPair))),
+            "source": Out(stream.Signature(framed(disparity_word(params)))),
             "framing_error": Out(1),
         })
 
@@ -115,34 +123,17 @@ class NpStereoCore(wiring.Component):
         m.d.sync += first.eq(round_ == rounds - 1)
         slots = SlotClock(m, first, round_, rounds, "core")
 
-        # Input: the pins reach one register without an enable and nothing else (registers
-        # fed by pins are placed by the pins; an enable computed inside the core had to
-        # travel there: census 9x9, 8.8 ns of routing on ECP5). Behind it a queue of
-        # INPUT_QUEUE register entries addressed by pointers: a push writes one entry, a
-        # pop only steps the read pointer, so the admission's decision reaches two
-        # flip-flops, not the enables of every entry (a shifting queue's pop was 8.2 ns,
-        # census 9x9). s_axis_tready leaves room for the beats in the capture and staging
-        # registers and the one the port may deliver in this clock.
-        beat = data.StructLayout({"data": 16, "user": 1, "last": 1})
-        incoming = Signal(beat)
-        m.d.comb += [incoming.data.eq(self.s_axis_tdata), incoming.user.eq(self.s_axis_tuser),
-                     incoming.last.eq(self.s_axis_tlast)]
-        pop = Signal()
-        captured, captured_valid = Signal.like(incoming, name="in_capture"), Signal()
-        m.d.sync += [captured.eq(incoming),
-                     captured_valid.eq(self.s_axis_tvalid & self.s_axis_tready)]
-        # A second plain register between the pins and the queue: the queue's write
-        # pointer reached the enables of its entries across the way to the pins
-        # (ext. rank 7x7: 8.1 ns, one LUT).
-        staged, staged_valid = Signal.like(incoming, name="in_staged"), Signal()
-        m.d.sync += [staged.eq(captured), staged_valid.eq(captured_valid)]
-        head, head_valid, above = _fifo(m, "in_queue", staged, staged_valid, pop,
-                                        INPUT_QUEUE, captured_valid,
-                                        lanes=[(0, 8), (8, 16), (16, 18)])
-        # level + captured_valid + staged_valid <= INPUT_QUEUE - 1, from the thermometer.
-        m.d.comb += self.s_axis_tready.eq(~Mux(
-            captured_valid & staged_valid, above[INPUT_QUEUE - 3],
-            Mux(captured_valid | staged_valid, above[INPUT_QUEUE - 2], above[INPUT_QUEUE - 1])))
+        # Input: the queue by the pins (see InputQueue). The left pixels, the right pixels
+        # and the framing flags go different ways: a lane each.
+        beat = data.Layout.cast(self.sink.payload.shape())
+        pixels_at = beat["data"].offset
+        lanes = [(pixels_at + field.offset, pixels_at + field.offset + field.width)
+                 for _, field in data.Layout.cast(PixelPair)]
+        lanes.append((beat["first"].offset, beat["last"].offset + 1))
+        m.submodules.in_queue = in_queue = InputQueue(beat, INPUT_QUEUE, lanes)
+        wiring.connect(m, wiring.flipped(self.sink), in_queue.sink)
+        pop = in_queue.source.ready
+        head, head_valid = in_queue.source.payload, in_queue.source.valid
         # The head is registered on its way to the admission and the position's register
         # (the queue sits by the pins: census 9x9, 9.6 ns through the queue's read
         # multiplexer to the position's register, census 7x7 8.9 ns to the admission's
@@ -157,26 +148,21 @@ class NpStereoCore(wiring.Component):
             head_pixels = head.data if rounds == 1 else pipe(m, head.data, 1, "in_queue_pixels")
 
         # Output: the queue of words, and the credits of positions it can still take.
-        word_layout = data.StructLayout({"data": output_width(p), "user": 1, "last": 1})
+        word = Signal(self.source.payload.shape())
         m.submodules.out_queue = queue = SyncFIFOBuffered(
-            width=word_layout.size, depth=self.queue_depth)
-        word = Signal(word_layout)
-        # The ports are driven by a register slice (an output register and a skid
-        # register): m_axis_tready reaches the output register's enable and nothing else,
-        # and that enable is one LUT from the pin and tvalid (a shifting queue's pop logic
-        # was three LUTs and 8.8 ns from tvalid to tdata, ext. rank 7x7 on ECP5).
-        queued = Signal(word_layout)
-        m.d.comb += queued.eq(queue.r_data)
-        out_head, out_valid, port_ready = _register_slice(
-            m, "out_port", queued, queue.r_rdy, self.m_axis_tready)
-        m.d.comb += queue.r_en.eq(port_ready)
+            width=len(word.as_value()), depth=self.queue_depth)
+        # The port is driven by a register slice (an output register and a skid register):
+        # the sink's ready reaches the output register's enable and nothing else, and that
+        # enable is one LUT from the pin and valid (a shifting queue's pop logic was three
+        # LUTs and 8.8 ns from m_axis_tvalid to m_axis_tdata, ext. rank 7x7 on ECP5).
+        m.submodules.out_port = out_port = RegisterSlice(word.shape())
+        wiring.connect(m, queue.r_stream, out_port.sink)
+        wiring.connect(m, out_port.source, wiring.flipped(self.source))
         m.d.comb += [
             queue.w_en.eq(lr.produce), queue.w_data.eq(word),
-            self.m_axis_tvalid.eq(out_valid), self.m_axis_tdata.eq(out_head.data),
-            self.m_axis_tuser.eq(out_head.user), self.m_axis_tlast.eq(out_head.last),
-            word.data.eq(Cat(Mux(lr.valid, lr.disparity_out, 0),
-                             Const(0, output_width(p) - 1 - len(lr.disparity_out)), lr.valid)),
-            word.user.eq(lr.frame_start), word.last.eq(lr.line_end),
+            word.data.disparity.eq(Mux(lr.valid, lr.disparity_out, 0)),
+            word.data.valid.eq(lr.valid),
+            word.first.eq(lr.frame_start), word.last.eq(lr.line_end),
         ]
         admit = Signal()        # the decision of this clock: the next slot has a position
         credit_taken = Signal()  # the same, a clock late with R >= 2 (see below)
@@ -194,7 +180,8 @@ class NpStereoCore(wiring.Component):
         # then reach the counter's adder from registers (census 9x9 on ECP5: 9.6 ns, eight
         # levels, from the output port's level through the FIFO's read to the counter).
         back = Signal(2, name="credits_back")
-        m.d.sync += back.eq((queue.r_rdy & port_ready) + (lr.retire & ~lr.produce))
+        m.d.sync += back.eq((out_port.sink.valid & out_port.sink.ready)
+                            + (lr.retire & ~lr.produce))
         returned = credits + back
         kept = Signal(range(self.queue_depth + 3), name="credits_kept")
         taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
@@ -244,11 +231,11 @@ class NpStereoCore(wiring.Component):
             "drop", "can_start", "restart", "can_take", "misframed", "last_beat",
             "frame_end", "credit", "flush_start", "done")})
         now = Signal(conditions)
-        can_start = head_valid & head.user & ~inp.switch_pending & has_credit
+        can_start = head_valid & head.first & ~inp.switch_pending & has_credit
         m.d.comb += [
-            now.drop.eq(head_valid & ~head.user),       # a beat without a start of frame
+            now.drop.eq(head_valid & ~head.first),      # a beat without a start of frame
             now.can_start.eq(can_start),
-            now.restart.eq(head_valid & head.user),     # a start of frame inside a frame
+            now.restart.eq(head_valid & head.first),    # a start of frame inside a frame
             now.can_take.eq(head_valid & has_credit),
             now.misframed.eq(head.last != end_of_line),
             now.last_beat.eq(head.last),
@@ -376,13 +363,13 @@ class NpStereoCore(wiring.Component):
         # rank 7x7 on ECP5: 7.9 ns through one LUT, also with one register between).
         raw = pipe(m, head_pixels, 2, "raw_pixels")
         taken = pipe(m, take, 2, "taken")
-        pixels = Signal(16, reset_less=True)
+        pixels = Signal(PixelPair, reset_less=True)
         m.d.sync += pixels.eq(Mux(taken, raw, 0))
 
         m.d.comb += [
             # The decision itself: the input stage registers it where it is used.
             inp.admit.eq(handed.admit), inp.start.eq(handed.start), inp.overlap.eq(handed.overlap),
-            inp.left.eq(pixels[:8]), inp.right.eq(pixels[8:]),
+            inp.left.eq(pixels.left), inp.right.eq(pixels.right),
             inp.first.eq(first), inp.round.eq(round_),
             calc.window_left.eq(inp.window_left), calc.window_right.eq(inp.window_right),
             calc.centres_left.eq(inp.centres_left), calc.centres_right.eq(inp.centres_right),
@@ -411,75 +398,3 @@ def _has_room(credits):
 
 #: Entries of the input queue (a power of two: its pointers wrap by themselves).
 INPUT_QUEUE = 4
-
-
-def _fifo(m, name, incoming, push, pop, depth, push_next, lanes):
-    """A queue of ``depth`` registers (a power of two, >= 4) addressed by pointers; returns
-    ``(head, valid, above)``.
-
-    ``push`` writes ``incoming`` (the caller keeps the queue from overflowing), ``pop``
-    drops the head (only when ``valid``). ``push_next`` is ``push`` a clock ahead: each
-    entry's write enable is then a register of its own (the write pointer reaching the
-    enables of every entry was 9 ns of routing, ext. rank 9x9 on ECP5). The entries are cut
-    into ``lanes`` (bit ranges) that go different ways (the left pixel, the right pixel, the
-    framing flags), each with pointers and enables of its own: one enable for a whole
-    entry spanned the core (census 9x9: 8.8 ns of routing). ``head`` is the entry at the read
-    pointer, ``valid`` a register of its own ("not empty"), ``above[k]`` says that more than
-    k entries are held.
-    """
-    # The level in thermometer code: each flag's next value is one of itself and its two
-    # neighbours, chosen by push and pop (one LUT). A counter's adder and a comparison with
-    # zero for ``valid`` took four LUT levels after the pop (rank 13x13 on ECP5, 6.7 ns).
-    above = [Signal(name=f"{name}_above{k}") for k in range(depth)]
-    for k in range(depth):
-        lower = above[k - 1] if k > 0 else Const(1)
-        upper = above[k + 1] if k + 1 < depth else Const(0)
-        m.d.sync += above[k].eq(Mux(push & ~pop, lower, Mux(pop & ~push, upper, above[k])))
-    valid = above[0]
-    head = Signal.like(incoming, name=f"{name}_head")
-    word = incoming.as_value()
-    for lane, (low, high) in enumerate(lanes):
-        # Pointers of the lane's own (counters, which synthesis does not merge).
-        write = Signal(range(depth), name=f"{name}_write{lane}")
-        read = Signal(range(depth), name=f"{name}_read{lane}")
-        next_write = Signal.like(write, name=f"{name}_next_write{lane}")
-        m.d.comb += next_write.eq(write + push)
-        m.d.sync += write.eq(next_write)
-        with m.If(pop):
-            m.d.sync += read.eq(read + 1)
-        entries = [Signal(high - low, name=f"{name}{k}_{lane}") for k in range(depth)]
-        for k, entry in enumerate(entries):
-            enable = Signal(name=f"{name}{k}_{lane}_write")
-            m.d.sync += enable.eq(push_next & (next_write == k))
-            with m.If(enable):
-                m.d.sync += entry.eq(word[low:high])
-        with m.Switch(read):
-            for k, entry in enumerate(entries):
-                with m.Case(k):
-                    m.d.comb += head.as_value()[low:high].eq(entry)
-    return head, valid, above
-
-
-def _register_slice(m, name, incoming, incoming_valid, ready):
-    """An AXI4-Stream register slice: the output and a skid register; returns
-    ``(head, valid, accept)``.
-
-    ``head``/``valid`` are registers (they drive the port), ``ready`` (the port's) reaches
-    the output register's enable only, and ``accept`` (take ``incoming`` in this clock) is
-    a register of its own: the skid register is empty.
-    """
-    head = Signal.like(incoming, name=f"{name}_data", reset_less=True)
-    skid = Signal.like(incoming, name=f"{name}_skid", reset_less=True)
-    valid, skid_valid = Signal(name=f"{name}_valid"), Signal(name=f"{name}_skid_valid")
-    taken = incoming_valid & ~skid_valid
-    # The skid takes every word while it is empty: the enable of its data is then the
-    # register beside it, not the port's valid by the pins (census 7x7 on ECP5: 7.3 ns from
-    # m_axis_tvalid to the skid's enables).
-    with m.If(~skid_valid):
-        m.d.sync += skid.eq(incoming)
-    with m.If(ready | ~valid):
-        m.d.sync += [head.eq(Mux(skid_valid, skid, incoming)),
-                     valid.eq(skid_valid | incoming_valid), skid_valid.eq(0)]
-    with m.Elif(taken):
-        m.d.sync += skid_valid.eq(1)
-    return head, valid, ~skid_valid

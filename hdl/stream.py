@@ -1,85 +1,109 @@
-"""The core for Amaranth designs: ``amaranth.lib.stream`` in and out.
+"""The formats of the core's streams, described once for the hardware and for numpy.
 
-:class:`~.core.NpStereoCore` is the Verilog top level, with AXI4-Stream video port names
-so that it drops into vendor video pipelines. An Amaranth design wants streams instead:
-:class:`StereoStream` wraps the same core (no logic of its own, so the generated core
-and everything proved about it stay the same) behind a ``sink`` of pixel pairs and a
-``source`` of disparities, each a :class:`amaranth.lib.stream.Signature` with
-valid/ready handshaking.
+:class:`PixelPair` is the input word (both images' pixels at one position),
+:func:`disparity_word` the output word (a disparity and its valid flag); :func:`framed`
+adds the framing flags a stream payload carries beside its word. The core's ports
+(:class:`~.core.NpStereoCore`) are :class:`amaranth.lib.stream.Signature` streams of these
+payloads, the Verilog top level (:mod:`.verilog`) maps the word to ``tdata`` and the flags
+to ``tuser``/``tlast``, and :class:`WordCodec` packs and unpacks numpy frames with the
+offsets and widths it reads from the same layouts: the co-simulation, the harness and the
+tests have no bit position of their own.
 """
 
-from amaranth.hdl import Cat, Module, unsigned
-from amaranth.lib import data, stream, wiring
-from amaranth.lib.wiring import In, Out
+import numpy as np
+from amaranth.hdl import unsigned
+from amaranth.lib import data
 
-from .core import NpStereoCore
+from .plan import output_width
 
-__all__ = ["PixelPair", "disparity_layout", "StereoStream"]
+__all__ = ["PixelPair", "disparity_word", "framed", "WordCodec"]
 
 
 class PixelPair(data.Struct):
-    """One input beat: both images' pixels at the same position, with framing flags."""
+    """One input word: the left and the right image's pixel at the same position."""
     left: unsigned(8)
     right: unsigned(8)
-    first: unsigned(1)   # start of frame (AXI ``tuser``): pixel (0, 0)
-    last: unsigned(1)    # end of line (AXI ``tlast``): pixel (W-1, y)
 
 
-def disparity_layout(params):
-    """One output beat: the disparity of a position, its valid flag and framing flags."""
-    return data.StructLayout({"disparity": unsigned(params.disparity_bits),
-                              "valid": unsigned(1), "first": unsigned(1),
-                              "last": unsigned(1)})
+def disparity_word(params):
+    """One output word: the disparity (0 where invalid) from bit 0, the valid flag in the
+    top bit of :func:`~.plan.output_width` (whole bytes, as video IP expects); the bits
+    between are 0."""
+    size = output_width(params)
+    return data.FlexibleLayout(size, {
+        "disparity": data.Field(unsigned(params.disparity_bits), 0),
+        "valid": data.Field(unsigned(1), size - 1)})
 
 
-class StereoStream(wiring.Component):
-    """Streaming stereo core with ``amaranth.lib.stream`` interfaces.
+def framed(word):
+    """A stream payload: ``data`` (the word), ``first`` on a frame's first pixel (0, 0),
+    ``last`` on every line's last pixel (W-1, y)."""
+    return data.StructLayout({"data": word, "first": 1, "last": 1})
 
-    Parameters
-    ----------
-    params : StereoParams
-        With ``width`` and ``height``.
 
-    Members
-    -------
-    sink : In(stream.Signature(PixelPair))
-        Pixel pairs in raster order; ``first`` on (0, 0), ``last`` on every line's end.
-    source : Out(stream.Signature(disparity_layout(params)))
-        One beat per input pixel in raster order; ``disparity`` is 0 where ``valid`` is 0.
-    framing_error : Out(1)
-        One-clock pulse per framing error (docs/semantics.md, "Hardware").
+def _mask(field):
+    return (1 << field.width) - 1
+
+
+def _get(words, field):
+    return (words >> field.offset) & _mask(field)
+
+
+def _put(values, field):
+    return (np.asarray(values, dtype=np.int64) & _mask(field)) << field.offset
+
+
+class WordCodec:
+    """The words of one configuration's streams as integers, for numpy frames.
+
+    Words are int64 arrays; a negative word is one the simulator left undefined (x/z).
     """
 
     def __init__(self, params):
         self.params = params
-        self.core = NpStereoCore(params)
-        super().__init__({
-            "sink": In(stream.Signature(PixelPair)),
-            "source": Out(stream.Signature(disparity_layout(params))),
-            "framing_error": Out(1),
-        })
+        self.pixels = data.Layout.cast(PixelPair)
+        self.disparity = disparity_word(params)
+        #: An output beat with its flags: the records of the Verilog harness's response.
+        self.beat = framed(self.disparity)
 
-    @property
-    def latency(self):
-        """Positions from a pixel's entry to its output beat (without stalls)."""
-        return self.core.latency
+    def pack_pixels(self, left, right):
+        """Input words in raster order from two (H, W) uint8 images."""
+        return (_put(left, self.pixels["left"])
+                | _put(right, self.pixels["right"])).ravel()
 
-    def elaborate(self, platform):
-        m = Module()
-        m.submodules.core = core = self.core
-        bits = self.params.disparity_bits
-        m.d.comb += [
-            core.s_axis_tdata.eq(Cat(self.sink.payload.left, self.sink.payload.right)),
-            core.s_axis_tuser.eq(self.sink.payload.first),
-            core.s_axis_tlast.eq(self.sink.payload.last),
-            core.s_axis_tvalid.eq(self.sink.valid),
-            self.sink.ready.eq(core.s_axis_tready),
-            self.source.payload.disparity.eq(core.m_axis_tdata[:bits]),
-            self.source.payload.valid.eq(core.m_axis_tdata[-1]),
-            self.source.payload.first.eq(core.m_axis_tuser),
-            self.source.payload.last.eq(core.m_axis_tlast),
-            self.source.valid.eq(core.m_axis_tvalid),
-            core.m_axis_tready.eq(self.source.ready),
-            self.framing_error.eq(core.framing_error),
-        ]
-        return m
+    def pack_disparity(self, disparity):
+        """The output words for a disparity map (-1 invalid: the word 0), raster order."""
+        disparity = np.asarray(disparity, dtype=np.int64).ravel()
+        valid = disparity >= 0
+        return np.where(valid, _put(disparity, self.disparity["disparity"])
+                        | _put(1, self.disparity["valid"]), 0)
+
+    def unpack_disparity(self, words):
+        """int16 disparities of output words: -1 where the valid flag is clear or the word
+        undefined."""
+        words = np.asarray(words, dtype=np.int64)
+        valid = (words >= 0) & (_get(words, self.disparity["valid"]) == 1)
+        return np.where(valid, _get(words, self.disparity["disparity"]), -1).astype(np.int16)
+
+    def unpack_beats(self, records):
+        """``(words, first, last)`` of records laid out as :attr:`beat`; an undefined
+        record (negative) gives the word -1 and clear flags."""
+        records = np.asarray(records, dtype=np.int64)
+        defined = records >= 0
+        return tuple(np.where(defined, _get(records, self.beat[name]), default)
+                     for name, default in (("data", -1), ("first", 0), ("last", 0)))
+
+    def describe(self, word):
+        """A readable value of one output word for a mismatch report: the disparity, -1
+        for the invalid word, "X" for an undefined word, else the raw word in hex (a
+        disparity out of range, a padding bit set)."""
+        word = int(word)
+        if word < 0:
+            return "X"
+        if word == 0:
+            return -1
+        disparity = int(self.unpack_disparity(word))
+        if disparity >= 0 and int(self.pack_disparity(disparity)[0]) == word \
+                and disparity < self.params.disparities:
+            return disparity
+        return hex(word)

@@ -1,5 +1,8 @@
-"""Verilog of one ``npstereo_core``: elaboration of :class:`~.core.NpStereoCore`.
+"""Verilog of one ``npstereo_core``: :class:`~.core.NpStereoCore` behind AXI4-Stream ports.
 
+The core's streams become AXI4-Stream video ports here and nowhere else (:class:`AxiTop`):
+the word of a payload is ``tdata``, its ``first`` flag ``tuser`` (start of frame), its
+``last`` flag ``tlast`` (end of line), so that the core drops into vendor video pipelines.
 The text starts with a comment recording the parameters and the tool versions, so a
 generated file says what it is without its command line.
 """
@@ -7,11 +10,14 @@ generated file says what it is without its command line.
 from importlib.metadata import PackageNotFoundError, version
 
 from amaranth.back import verilog as amaranth_verilog
+from amaranth.hdl import Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
 
 from .core import NpStereoCore
 from .plan import check_buildable, latency, output_width
 
-__all__ = ["TOP_NAME", "core_verilog", "header"]
+__all__ = ["TOP_NAME", "AxiTop", "core_verilog", "header"]
 
 #: Module name of the generated top level (the harness and synthesis refer to it).
 TOP_NAME = "npstereo_core"
@@ -47,6 +53,38 @@ def header(params):
     return "".join(f"// {line}\n" for line in lines)
 
 
+class AxiTop(wiring.Component):
+    """The core with AXI4-Stream ports: ``s_axis_*`` in, ``m_axis_*`` out (docs/semantics.md,
+    "Hardware interface"), ``framing_error``; no logic of its own."""
+
+    def __init__(self, params):
+        self.core = NpStereoCore(params)
+        pixels = len(self.core.sink.payload.data.as_value())
+        disparities = len(self.core.source.payload.data.as_value())
+        super().__init__({
+            "s_axis_tdata": In(pixels), "s_axis_tvalid": In(1), "s_axis_tready": Out(1),
+            "s_axis_tuser": In(1), "s_axis_tlast": In(1),
+            "m_axis_tdata": Out(disparities), "m_axis_tvalid": Out(1),
+            "m_axis_tready": In(1), "m_axis_tuser": Out(1), "m_axis_tlast": Out(1),
+            "framing_error": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.core = core = self.core
+        sink, source = core.sink, core.source
+        m.d.comb += [
+            sink.payload.data.eq(self.s_axis_tdata), sink.payload.first.eq(self.s_axis_tuser),
+            sink.payload.last.eq(self.s_axis_tlast), sink.valid.eq(self.s_axis_tvalid),
+            self.s_axis_tready.eq(sink.ready),
+            self.m_axis_tdata.eq(source.payload.data), self.m_axis_tuser.eq(source.payload.first),
+            self.m_axis_tlast.eq(source.payload.last), self.m_axis_tvalid.eq(source.valid),
+            source.ready.eq(self.m_axis_tready),
+            self.framing_error.eq(core.framing_error),
+        ]
+        return m
+
+
 def core_verilog(params):
     """Verilog text of the core for ``params``.
 
@@ -57,5 +95,5 @@ def core_verilog(params):
         (:func:`~.plan.check_buildable`), before anything is elaborated.
     """
     check_buildable(params)
-    text = amaranth_verilog.convert(NpStereoCore(params), name=TOP_NAME, emit_src=False)
+    text = amaranth_verilog.convert(AxiTop(params), name=TOP_NAME, emit_src=False)
     return header(params) + text

@@ -7,55 +7,58 @@ Amaranth's Python simulator runs a few thousand cycles per second, so small crop
 from amaranth.sim import Simulator
 
 from ..hdl.core import NpStereoCore
-from .frames import input_words
+from ..hdl.stream import WordCodec
 
 __all__ = ["run_amaranth"]
 
 
 def run_amaranth(params, left, right, progress=None):
-    """Stream one frame; return (data, tuser, tlast, cycles) of the output beats.
+    """Stream one frame; return (words, first, last, cycles) of the output beats.
 
-    ``cycles`` counts from the first input handshake to the last output beat.
-    ``progress(n)`` is called with the number of further output pixels received.
+    The words are integers (:class:`~npstereo.hdl.stream.WordCodec`), as the Verilog
+    simulators deliver them. ``cycles`` counts from the first input handshake to the last
+    output beat; ``progress(n)`` is called with the number of further output pixels received.
     """
     core = NpStereoCore(params)
-    words = input_words(left, right).tolist()
+    sink, source = core.sink, core.source
+    words = WordCodec(params).pack_pixels(left, right).tolist()
     width, pixels = params.width, params.width * params.height
-    data, tuser, tlast = [], [], []
+    got, first, last = [], [], []
     clock = {"cycle": 0, "first_in": None, "last_out": 0}
 
-    async def source(ctx):
+    async def feed(ctx):
         for index, word in enumerate(words):
-            ctx.set(core.s_axis_tdata, word)
-            ctx.set(core.s_axis_tuser, index == 0)
-            ctx.set(core.s_axis_tlast, index % width == width - 1)
-            ctx.set(core.s_axis_tvalid, 1)
-            await ctx.tick().until(core.s_axis_tready)
+            ctx.set(sink.payload.data.as_value(), word)
+            ctx.set(sink.payload.first, index == 0)
+            ctx.set(sink.payload.last, index % width == width - 1)
+            ctx.set(sink.valid, 1)
+            await ctx.tick().until(sink.ready)
             if clock["first_in"] is None:
                 clock["first_in"] = clock["cycle"]
-        ctx.set(core.s_axis_tvalid, 0)
+        ctx.set(sink.valid, 0)
 
-    async def sink(ctx):
-        ctx.set(core.m_axis_tready, 1)
+    async def drain(ctx):
+        ctx.set(source.ready, 1)
         # Generous bound: R clocks per pixel plus a few lines of latency, then give up.
         limit = pixels * params.rounds * 2 + 64 * width * params.rounds + 1000
-        async for _, _, valid, word, user, last in ctx.tick().sample(
-                core.m_axis_tvalid, core.m_axis_tdata, core.m_axis_tuser, core.m_axis_tlast):
+        async for _, _, valid, word, first_flag, last_flag in ctx.tick().sample(
+                source.valid, source.payload.data.as_value(), source.payload.first,
+                source.payload.last):
             clock["cycle"] += 1
             if valid:
-                data.append(word)
-                tuser.append(user)
-                tlast.append(last)
+                got.append(word)
+                first.append(first_flag)
+                last.append(last_flag)
                 clock["last_out"] = clock["cycle"]
-                if progress is not None and len(data) % width == 0:
+                if progress is not None and len(got) % width == 0:
                     progress(width)
-            if len(data) >= pixels or clock["cycle"] > limit:
+            if len(got) >= pixels or clock["cycle"] > limit:
                 break
 
     sim = Simulator(core)
     sim.add_clock(1e-8)
-    sim.add_testbench(source, background=True)
-    sim.add_testbench(sink)
+    sim.add_testbench(feed, background=True)
+    sim.add_testbench(drain)
     sim.run()
     cycles = clock["last_out"] - (clock["first_in"] or 0) + 1
-    return data, tuser, tlast, cycles
+    return got, first, last, cycles

@@ -23,6 +23,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, First, RisingEdge, Timer
 from cocotbext.axi import AxiStreamBus, AxiStreamFrame, AxiStreamSink, AxiStreamSource
 
+from npstereo.hdl.stream import WordCodec
 from npstereo.params import StereoParams
 from npstereo.sim.frames import Comparison, compare_frame, decode_map
 
@@ -185,7 +186,6 @@ async def harness_test(dut):
     only supervises."""
     run_dir, plan, params, data = _load_plan()
     pixels = params.width * params.height
-    out_bits = plan["out_bits"]
     period = plan["period_ns"]
     dut.dump.value = 0
     # The harness's registers hold X until its reset has passed.
@@ -201,11 +201,8 @@ async def harness_test(dut):
     progress.write_text(str(received))
     dut.dump.value = 1
     await Timer(2 * period, unit="ns")
-    words = _read_memh(run_dir / "resp.hex", min(received, pixels))
-    valid = words >= 0
-    got = np.where(valid, words & ((1 << out_bits) - 1), -1)
-    tuser = np.where(valid, (words >> out_bits) & 1, 0)
-    tlast = np.where(valid, (words >> (out_bits + 1)) & 1, 0)
+    records = _read_memh(run_dir / "resp.hex", min(received, pixels))
+    got, tuser, tlast = WordCodec(params).unpack_beats(records)
     comparison = compare_frame(data["out0"], got, tuser, tlast, params)
     np.save(run_dir / "disparity.npy", decode_map(got, params))
     if received > pixels:

@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 
 from ..golden.pipeline import disparity_map
-from ..hdl.plan import output_width
+from ..hdl.stream import WordCodec
 from ..hdl.verilog import TOP_NAME, core_verilog
 from .amaranth_run import run_amaranth
 from .build import CosimError, build
-from .frames import Comparison, compare_frame, decode_map, expected_words, input_words
-from .harness import HARNESS_TOP, PERIOD_NS, RESET_CYCLES, harness_verilog
+from .frames import Comparison, compare_frame, decode_map
+from .harness import HARNESS_TOP, PERIOD_NS, RESET_CYCLES, harness_verilog, stimulus_text
 
 __all__ = ["SIMULATORS", "CosimError", "RunResult", "golden_words", "run_stream",
            "run_frame"]
@@ -131,7 +131,8 @@ def _run(model, test, plan, arrays, progress=None, files=None):
 def golden_words(left, right, params):
     """Input words and expected output words of one frame pair."""
     golden = disparity_map(left, right, params).disparity
-    return input_words(left, right), expected_words(golden, params)
+    codec = WordCodec(params)
+    return codec.pack_pixels(left, right), codec.pack_disparity(golden)
 
 
 def _quiet_cycles(params):
@@ -217,7 +218,7 @@ def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpres
         raise ValueError(f"simulator must be one of {', '.join(SIMULATORS)}")
     if golden is None:
         golden = disparity_map(left, right, params).disparity
-    expected = expected_words(golden, params)
+    expected = WordCodec(params).pack_disparity(golden)
     if simulator == "amaranth":
         if idle or backpressure:
             raise ValueError("the amaranth run streams without idle cycles or backpressure")
@@ -233,12 +234,10 @@ def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpres
     # Generous: R cycles per pixel, random traffic, and a few lines of latency.
     budget = int(pixels * params.rounds / max(0.05, (1 - idle) * (1 - backpressure)) * 2
                  + _quiet_cycles(params) * 4)
-    plan = {"params": dataclasses.asdict(params), "out_bits": output_width(params),
-            "period_ns": PERIOD_NS, "reset_cycles": RESET_CYCLES, "timeout_cycles": budget,
+    plan = {"params": dataclasses.asdict(params), "period_ns": PERIOD_NS, "reset_cycles": RESET_CYCLES, "timeout_cycles": budget,
             "progress_cycles": max(4096, budget // 200)}
     # The harness reads stim.hex from its working directory, the run directory.
-    stimulus = "\n".join(f"{word:04x}" for word in input_words(left, right).tolist()) + "\n"
     result = _run(model, "harness_test", plan, {"out0": expected}, progress,
-                  {"stim.hex": stimulus})
+                  {"stim.hex": stimulus_text(WordCodec(params), left, right)})
     result.disparity = np.load(result.run_dir / "disparity.npy")
     return result

@@ -1,6 +1,6 @@
-"""Pixel words in and out of the core, and the bit-exact comparison with the golden model.
+"""Whole frames of output words, and the bit-exact comparison with the golden model.
 
-Numpy and the hardware's word width (:func:`npstereo.hdl.plan.output_width`), shared by
+The words themselves are :class:`npstereo.hdl.stream.WordCodec`'s; this module is shared by
 the cocotb test modules (inside the simulator process) and by the command line / pytest
 side, so both report mismatches in exactly the same words.
 """
@@ -9,49 +9,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..hdl.plan import output_width
+from ..hdl.stream import WordCodec
 
-__all__ = ["input_words", "expected_words", "decode_word", "decode_map", "Comparison",
-           "compare_frame"]
-
-
-def input_words(left, right):
-    """``s_axis_tdata`` words in raster order: right pixel in bits 15:8, left in 7:0."""
-    return (right.astype(np.uint32) << 8 | left.astype(np.uint32)).ravel()
+__all__ = ["decode_map", "Comparison", "compare_frame"]
 
 
-def expected_words(disparity, params):
-    """The words the core must emit for a golden map (-1 = invalid: all bits 0)."""
-    valid = disparity >= 0
-    words = np.where(valid, disparity.astype(np.int64) | (1 << (output_width(params) - 1)), 0)
-    return words.astype(np.int64).ravel()
-
-
-def decode_word(word, params):
-    """A readable value for a mismatch report: the disparity, -1 for invalid, "X" for an
-    undefined word (negative: how the harness marks x/z), else the raw word in hex."""
-    flag = 1 << (output_width(params) - 1)
-    word = int(word)
-    if word < 0:
-        return "X"   # undefined (x/z) bits in the simulator
-    if word == 0:
-        return -1
-    if word & flag and (word & ~flag) < params.disparities:
-        return word & ~flag
-    return hex(word)
-
-
-def decode_map(words, params):
+def decode_map(words, params, missing=-1):
     """The hardware's disparity map (int16, -1 invalid) from its output words.
 
-    Missing pixels (fewer words than W*H) and words with the valid flag clear are -1.
+    Words with the valid flag clear are -1, missing pixels (fewer words than W*H)
+    ``missing``.
     """
     pixels = params.width * params.height
-    words = np.asarray(words, dtype=np.int64)[:pixels]
-    flag = 1 << (output_width(params) - 1)
-    disparity = np.full(pixels, -1, dtype=np.int16)
-    valid = (words >= 0) & ((words & flag) != 0)
-    disparity[:words.size][valid] = (words[valid] & ((1 << params.disparity_bits) - 1))
+    decoded = WordCodec(params).unpack_disparity(np.asarray(words, dtype=np.int64)[:pixels])
+    disparity = np.full(pixels, missing, dtype=np.int16)
+    disparity[:decoded.size] = decoded
     return disparity.reshape(params.height, params.width)
 
 
@@ -98,7 +70,7 @@ def compare_frame(expected, got, tuser, tlast, params):
     Parameters
     ----------
     expected : (W*H,) int array
-        From :func:`expected_words`.
+        From :meth:`~npstereo.hdl.stream.WordCodec.pack_disparity`.
     got, tuser, tlast : sequences
         ``m_axis_tdata``/``tuser``/``tlast`` of the received beats, in order; fewer or more
         beats than W*H is a framing error, and missing pixels count as mismatches.
@@ -107,6 +79,7 @@ def compare_frame(expected, got, tuser, tlast, params):
     """
     width, height = params.width, params.height
     pixels = width * height
+    describe = WordCodec(params).describe
     got = np.asarray(got, dtype=np.int64)
     framing = []
     if got.size != pixels:
@@ -117,10 +90,10 @@ def compare_frame(expected, got, tuser, tlast, params):
     first = None
     if differ.size:
         index = int(differ[0])
-        first = (index % width, index // width, decode_word(expected[index], params),
-                 decode_word(got[index], params))
+        first = (index % width, index // width, describe(expected[index]),
+                 describe(got[index]))
     elif n < pixels:
-        first = (n % width, n // width, decode_word(expected[n], params), "nothing")
+        first = (n % width, n // width, describe(expected[n]), "nothing")
     tuser = np.asarray(tuser[:n], dtype=bool)
     tlast = np.asarray(tlast[:n], dtype=bool)
     index = np.arange(n)

@@ -12,19 +12,37 @@ metacomments), so Verilator optimises the core freely; a clock driven from cocot
 its C++ GPI clock, costs two VPI callbacks and writes per cycle, a Verilog clock none.
 
 Idle cycles on the input and backpressure on the output come from a 32-bit xorshift
-generator with thresholds in 1/256, so the fast path can stress the handshakes too.
+generator with thresholds in 1/256, so the fast path can stress the handshakes too. The
+stimulus words and the response records have the widths and the field order of
+:class:`~npstereo.hdl.stream.WordCodec`'s layouts.
 """
 
-from ..hdl.plan import output_width
+from ..hdl.stream import WordCodec
 from ..hdl.verilog import TOP_NAME
 
-__all__ = ["HARNESS_TOP", "PERIOD_NS", "RESET_CYCLES", "harness_verilog"]
+__all__ = ["HARNESS_TOP", "PERIOD_NS", "RESET_CYCLES", "harness_verilog", "stimulus_text"]
 
 HARNESS_TOP = "npstereo_harness"
 #: Clock period of the harness (timescale 1 ns).
 PERIOD_NS = 10
 #: Clocks the harness holds ``rst`` high at the start.
 RESET_CYCLES = 4
+
+
+#: The harness's wire for each field of an output beat (``WordCodec.beat``).
+_BEAT_WIRES = {"data": "m_data", "first": "m_user", "last": "m_last"}
+
+
+def _record(codec):
+    """The Verilog concatenation of the beat's fields into one record, top field first."""
+    fields = sorted(codec.beat, key=lambda item: item[1].offset, reverse=True)
+    return "{" + ", ".join(_BEAT_WIRES[name] for name, _ in fields) + "}"
+
+
+def stimulus_text(codec, left, right):
+    """``stim.hex`` of a frame: one input word per line, in hex (``$readmemh``)."""
+    digits = -(-codec.pixels.size // 4)
+    return "".join(f"{word:0{digits}x}\n" for word in codec.pack_pixels(left, right).tolist())
 
 
 def harness_verilog(params, idle=0.0, backpressure=0.0, seed=1):
@@ -41,7 +59,8 @@ def harness_verilog(params, idle=0.0, backpressure=0.0, seed=1):
         Non-zero seed of the xorshift generator.
     """
     pixels = params.width * params.height
-    out_bits = output_width(params)
+    codec = WordCodec(params)
+    out_bits = codec.disparity.size
     idle_t = round(min(max(idle, 0.0), 1.0) * 255)
     stall_t = round(min(max(backpressure, 0.0), 1.0) * 255)
     return f"""\
@@ -68,8 +87,8 @@ module {HARNESS_TOP} (
         if (reset_count == 8'd{RESET_CYCLES - 1}) rst <= 1'b0;
     end
 
-    reg [15:0] stim [0:PIXELS-1];
-    reg [{out_bits + 1}:0] resp [0:PIXELS-1];
+    reg [{codec.pixels.size - 1}:0] stim [0:PIXELS-1];
+    reg [{codec.beat.size - 1}:0] resp [0:PIXELS-1];
     initial $readmemh("stim.hex", stim);
 
     reg [31:0] rng;
@@ -113,7 +132,7 @@ module {HARNESS_TOP} (
                 if (sent == 0) first_in <= cycle;
             end
             if (m_fire) begin
-                if (received < PIXELS) resp[received] <= {{m_last, m_user, m_data}};
+                if (received < PIXELS) resp[received] <= {_record(codec)};
                 received <= received + 1;
                 last_out <= cycle;
                 if (received == PIXELS - 1) done <= 1;

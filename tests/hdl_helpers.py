@@ -1,33 +1,36 @@
 """Drive the core in Amaranth's simulator: input beats in, output words out.
 
-One testbench coroutine plays both the source and the sink, clock by clock, so that random
-valid gaps and random backpressure cost no extra simulator processes. It drives either
-:class:`~npstereo.hdl.core.NpStereoCore` (AXI4-Stream ports) or
-:class:`~npstereo.hdl.stream.StereoStream` (``amaranth.lib.stream`` ports) through the same
-handshakes, so both are checked by the same scenarios.
+One testbench coroutine plays both the source and the sink of
+:class:`~npstereo.hdl.core.NpStereoCore`'s streams, clock by clock, so that random valid
+gaps and random backpressure cost no extra simulator processes. Beats go in as structured
+payloads (the layouts of :mod:`npstereo.hdl.stream`); output words come back as integers and
+are decoded as the co-simulation decodes them (:func:`npstereo.sim.frames.decode_map`).
 """
 
+import gc
 import random
+import warnings
 
 import numpy as np
-from amaranth.hdl import ResetInserter, Signal
+import pytest
+from amaranth.hdl import Fragment, Module, ResetInserter, Signal, UnusedElaboratable
 from amaranth.sim import Simulator
 
 from npstereo.golden.lr_check import INVALID
 from npstereo.golden.pipeline import disparity_map
 from npstereo.hdl.core import NpStereoCore
-from npstereo.hdl.plan import output_width
-from npstereo.hdl.stream import StereoStream
+from npstereo.sim.frames import decode_map
 
 __all__ = ["frame_beats", "run_scenario", "decode_frames", "first_mismatch", "check_frames",
-           "RESET"]
+           "RESET", "refused_quietly"]
 
 #: A marker in the beat list: assert ``rst`` for one clock at this point of the input.
 RESET = "reset"
 
 
 def frame_beats(left, right, *, drop_last_at=None):
-    """AXI beats (tdata, tuser, tlast) of one frame; optionally a missing ``tlast``.
+    """Input beats ``(pixels, first, last)`` of one frame, ``pixels`` the fields of a
+    :class:`~npstereo.hdl.stream.PixelPair`; optionally a missing ``last``.
 
     ``drop_last_at`` is a row whose end-of-line flag is left out (a line that seems too long).
     """
@@ -36,69 +39,30 @@ def frame_beats(left, right, *, drop_last_at=None):
     for y in range(height):
         for x in range(width):
             last = x == width - 1 and y != drop_last_at
-            beats.append((int(left[y, x]) | int(right[y, x]) << 8, x == 0 and y == 0, last))
+            pixels = {"left": int(left[y, x]), "right": int(right[y, x])}
+            beats.append((pixels, x == 0 and y == 0, last))
     return beats
 
 
-class _AxiPorts:
-    """The core's own ports."""
-
-    def __init__(self, core):
-        self.core = core
-        self.in_valid, self.in_ready = core.s_axis_tvalid, core.s_axis_tready
-        self.out_valid, self.out_ready = core.m_axis_tvalid, core.m_axis_tready
-
-    def offer(self, ctx, beat):
-        data, user, last = beat
-        ctx.set(self.core.s_axis_tdata, data)
-        ctx.set(self.core.s_axis_tuser, user)
-        ctx.set(self.core.s_axis_tlast, last)
-
-    def word(self, ctx):
-        return (ctx.get(self.core.m_axis_tdata), ctx.get(self.core.m_axis_tuser),
-                ctx.get(self.core.m_axis_tlast))
-
-
-class _StreamPorts:
-    """``StereoStream``'s sink and source, beats translated to and from the core's words."""
-
-    def __init__(self, stream):
-        self.stream = stream
-        self.in_valid, self.in_ready = stream.sink.valid, stream.sink.ready
-        self.out_valid, self.out_ready = stream.source.valid, stream.source.ready
-        self.flag = 1 << (output_width(stream.params) - 1)
-
-    def offer(self, ctx, beat):
-        data, user, last = beat
-        ctx.set(self.stream.sink.payload, {"left": data & 0xFF, "right": data >> 8,
-                                           "first": user, "last": last})
-
-    def word(self, ctx):
-        beat = ctx.get(self.stream.source.payload)
-        data = (beat.disparity | self.flag) if beat.valid else beat.disparity
-        return data, beat.first, beat.last
-
-
 def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None,
-                 stream=False, before_start=None):
+                 before_start=None):
     """Feed ``beats`` (RESET markers: a reset; an int n: n idle clocks) through a core;
     collect every output word.
 
-    The source keeps a beat offered until it is taken (AXI rule) but inserts random gaps
-    before offering the next; the sink drops ``tready`` at random. ``before_start(ctx)``
-    runs in the testbench before the first clock. With ``stream`` the
-    core is a :class:`StereoStream`, driven through its sink and source.
+    The source keeps a beat offered until it is taken (stream rule) but inserts random gaps
+    before offering the next; the sink drops ``ready`` at random. ``before_start(ctx)``
+    runs in the testbench before the first clock.
 
     Returns
     -------
     dict
-        ``words`` (list of (tdata, tuser, tlast)), ``errors`` (framing-error pulses),
-        ``frame_starts`` (clock of every output word with tuser), ``cycles`` (clocks until
-        the last word came out), ``last_input`` (the clock the last beat was taken),
-        ``latency`` (the core's, in positions).
+        ``words`` (list of (word, first, last), the word an integer), ``errors``
+        (framing-error pulses), ``frame_starts`` (clock of every output word with
+        ``first``), ``cycles`` (clocks until the last word came out), ``last_input`` (the
+        clock the last beat was taken), ``latency`` (the core's, in positions).
     """
-    dut = StereoStream(params) if stream else NpStereoCore(params)
-    ports = _StreamPorts(dut) if stream else _AxiPorts(dut)
+    dut = NpStereoCore(params)
+    sink, source = dut.sink, dut.source
     rst = Signal()
     top = ResetInserter({"sync": rst})(dut)
     rng = random.Random(seed)
@@ -116,8 +80,8 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
         state["last_input"] = None
         while cycle < limit:
             if index < len(beats) and beats[index] == RESET:
-                ctx.set(ports.in_valid, 0)
-                ctx.set(ports.out_ready, 0)
+                ctx.set(sink.valid, 0)
+                ctx.set(source.ready, 0)
                 ctx.set(rst, 1)
                 await ctx.tick()
                 ctx.set(rst, 0)
@@ -133,15 +97,17 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
             elif not offering and index < len(beats):
                 offering = rng.random() < valid_prob
             if offering:
-                ports.offer(ctx, beats[index])
-            ctx.set(ports.in_valid, offering)
+                pixels, first, last = beats[index]
+                ctx.set(sink.payload, {"data": pixels, "first": first, "last": last})
+            ctx.set(sink.valid, offering)
             ready = rng.random() < ready_prob
-            ctx.set(ports.out_ready, ready)
-            if offering and ctx.get(ports.in_ready):
+            ctx.set(source.ready, ready)
+            if offering and ctx.get(sink.ready):
                 index, offering = index + 1, False
                 state["last_input"] = cycle
-            if ready and ctx.get(ports.out_valid):
-                word = ports.word(ctx)
+            if ready and ctx.get(source.valid):
+                word = (ctx.get(source.payload.data.as_value()), ctx.get(source.payload.first),
+                        ctx.get(source.payload.last))
                 words.append(word)
                 if word[1]:
                     starts.append(cycle)
@@ -177,24 +143,16 @@ def check_frames(params, pairs, beats, **kwargs):
 
 
 def decode_frames(words, params):
-    """Split output words at ``tuser`` into H x W int16 maps (INVALID where not valid)."""
-    width, height = params.width, params.height
-    n_bits = params.disparity_bits
-    top = output_width(params) - 1
+    """Split output words at ``first`` into H x W int16 maps (INVALID where not valid, -2
+    where missing)."""
     frames, current = [], None
-    for data, user, _ in words:
-        if user:
+    for word, first, _ in words:
+        if first:
             current = []
             frames.append(current)
         if current is not None:
-            current.append(data)
-    maps = []
-    for values in frames:
-        out = np.full(width * height, INVALID - 1, dtype=np.int16)  # -2: missing
-        for i, data in enumerate(values[:width * height]):
-            out[i] = data & ((1 << n_bits) - 1) if data >> top & 1 else INVALID
-        maps.append(out.reshape(height, width))
-    return maps
+            current.append(word)
+    return [decode_map(values, params, missing=INVALID - 1) for values in frames]
 
 
 def first_mismatch(expected, got):
@@ -205,3 +163,17 @@ def first_mismatch(expected, got):
     y, x = diff[0]
     return (f"{len(diff)} pixels differ; first at x={x}, y={y}: expected "
             f"{expected[y, x]}, got {got[y, x]}")
+
+
+def refused_quietly(make, error, match):
+    """``make()`` raises ``error`` (message matching ``match``) and leaves no object behind
+    that Amaranth would report as created but never used."""
+    # Amaranth reports unused elaboratables only once something has been elaborated.
+    Fragment.get(Module(), None)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(error, match=match):
+            make()
+        gc.collect()
+    unused = [str(w.message) for w in caught if issubclass(w.category, UnusedElaboratable)]
+    assert not unused, f"left behind: {unused}"

@@ -61,13 +61,11 @@ def measured_flush(params):
                            * params.rounds):
             offering = index < len(beats)
             if offering:
-                data, user, last = beats[index]
-                ctx.set(core.s_axis_tdata, data)
-                ctx.set(core.s_axis_tuser, user)
-                ctx.set(core.s_axis_tlast, last)
-            ctx.set(core.s_axis_tvalid, offering)
-            ctx.set(core.m_axis_tready, 1)
-            if offering and ctx.get(core.s_axis_tready):
+                pixels, first, last = beats[index]
+                ctx.set(core.sink.payload, {"data": pixels, "first": first, "last": last})
+            ctx.set(core.sink.valid, offering)
+            ctx.set(core.source.ready, 1)
+            if offering and ctx.get(core.sink.ready):
                 index += 1
             if ctx.get(core.input_stage.admit):
                 # The admission's decision: its slot starts in the next clock.
@@ -138,7 +136,7 @@ def test_output_width_is_the_port_width(disparities, width):
     assert plan_structure.output_width(params) == width
     core = NpStereoCore(params)
     Fragment.get(core, None)
-    assert len(core.m_axis_tdata) == width
+    assert len(core.source.payload.data.as_value()) == width
     if disparities == 2:  # the smallest core generates in well under a second
         assert re.search(rf"output \[{width - 1}:0\] m_axis_tdata", core_verilog(params))
 
