@@ -23,7 +23,7 @@ __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "cycles_per_frame"]
 
 
-# The input stage ----------------------------------------------------------------------
+# The input stage --------------------------------------------------------------------------
 
 #: Clocks from the admission of a pixel to the window: the line buffers' block RAM read,
 #: its output register, the window's shift, the masked window's register, a second
@@ -31,7 +31,7 @@ __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
 INPUT_LATENCY = 5
 
 
-# The calculation stage and the box aggregation ----------------------------------------
+# The calculation stage and the box aggregation --------------------------------------------
 
 #: Largest skew between the first and the last cost unit with R = 1 (see :func:`unit_skews`).
 MAX_SKEW_ONE_ROUND = 7
@@ -144,7 +144,7 @@ def calculation_timing(params, every=DEFAULT_EVERY):
                              sums + min_tree + 1)
 
 
-# Semi-global aggregation (hdl/sgm.py) --------------------------------------------------
+# Semi-global aggregation (hdl/sgm.py) -----------------------------------------------------
 
 #: Clocks of the left path's loop besides its minimum tree: the store's read register,
 #: C + a, the running minimum over the rounds, the minimum m, the materialised L, the next
@@ -225,7 +225,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
                      rows + tree + params.rounds, summed)
 
 
-# Evaluation, L/R check, the whole core --------------------------------------------------
+# Evaluation, L/R check, the whole core ----------------------------------------------------
 
 def evaluation_latency(params):
     """Clocks from the evaluation stage's input (round 0's partition winner) to the
