@@ -1,6 +1,8 @@
 """Atomic output files: written to a temporary file beside the target, then renamed.
 
-A crash or an error half-way leaves the previous file (or nothing), never a torn one.
+A crash or an error half-way leaves the previous file (or nothing), never a torn one. A
+file that cannot be written (its folder cannot be created, is read-only, the disk is full)
+is an :class:`OutputError` naming it, which the command line prints as one line.
 """
 
 import contextlib
@@ -8,7 +10,17 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes", "write_text"]
+from ..params import UserError
+
+__all__ = ["OutputError", "atomic_path", "write_bytes", "write_text"]
+
+
+class OutputError(UserError):
+    """An output file that cannot be written."""
+
+
+def _failed(target, error):
+    return OutputError(f"cannot write {target}: {error.strerror or error}")
 
 
 @contextlib.contextmanager
@@ -16,18 +28,25 @@ def atomic_path(target, suffix=None):
     """Yield a temporary path; on success it is renamed to ``target``, on error removed.
 
     ``suffix`` defaults to the target's own, for tools that choose a format by extension.
+    An ``OSError`` on the way (creating the folder or the file, writing, renaming) is
+    raised as an :class:`OutputError`.
     """
     target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix or target.suffix,
-                               dir=target.parent)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix or target.suffix,
+                                   dir=target.parent)
+    except OSError as error:
+        raise _failed(target, error) from None
     os.close(fd)
     try:
         yield Path(tmp)
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as error:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(error, OSError):
+            raise _failed(target, error) from error
         raise
 
 

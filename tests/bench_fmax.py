@@ -11,7 +11,7 @@ single-threaded).
 import argparse
 import time
 
-from npstereo.gen.cmd_report import evaluate
+from npstereo.gen.reports.synthesis import synthesis_report
 from npstereo.params import TRANSFORMS, StereoParams
 
 
@@ -26,7 +26,7 @@ def main():
     params = StereoParams(transform=args.transform, block=args.block, disparities=100,
                           rounds=10, width=450, height=375)
     started = time.perf_counter()
-    report = evaluate(params, ["ecp5"], pnr=True, freq=args.freq)
+    report = synthesis_report(params, ["ecp5"], pnr=True, freq=args.freq)
     result = report["results"]["ecp5"]
     name = f"{params.transform} {params.block}x{params.block} D=100 R=10 450x375"
     if result["status"] != "ok":

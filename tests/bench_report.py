@@ -8,7 +8,8 @@ synthesis needs no images.
 import argparse
 import time
 
-from npstereo.gen.synth import TARGETS, synthesise
+from npstereo.gen.flow.synthesise import synthesise
+from npstereo.gen.flow.tools import TARGETS
 from npstereo.hdl.plan import cycles_per_frame, memory_bits
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import TRANSFORMS, StereoParams

@@ -1,5 +1,8 @@
-"""Shared fixtures: small seeded synthetic stereo pairs (no external data in tests); the
-tests marked ``dask`` kept together."""
+"""Shared fixtures: small seeded synthetic stereo pairs (no external data in tests), the
+libraries a command loads; the tests marked ``dask`` kept together."""
+
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -32,6 +35,24 @@ def pair_files(tmp_path, small_pair):
     Image.fromarray(small_pair.right).save(scene / "im6.png")
     Image.fromarray((4 * small_pair.ground_truth).astype(np.uint8)).save(scene / "disp2.pgm")
     return left, right, scene
+
+
+@pytest.fixture
+def libraries_loaded():
+    """``loaded(argv, names)``: run ``npstereo argv`` in a fresh interpreter; returns its
+    exit code, its standard output and which of the top-level modules ``names`` it
+    imported (sorted)."""
+    def loaded(argv, names):
+        script = ("import sys\nfrom npstereo.gen.cli.main import main\n"
+                  f"try:\n    code = main({list(argv)!r})\n"
+                  "except SystemExit as exit:\n    code = exit.code\n"
+                  f"print(sorted({{m.split('.')[0] for m in sys.modules}} & {set(names)!r}))\n"
+                  "sys.exit(code)\n")
+        result = subprocess.run([sys.executable, "-c", script], capture_output=True,
+                                text=True, timeout=120, check=False)
+        *output, modules = result.stdout.splitlines() or [""]
+        return result.returncode, "\n".join(output), modules
+    return loaded
 
 
 def pytest_collection_modifyitems(items):

@@ -5,9 +5,9 @@ import time
 
 import pytest
 
-from npstereo.gen import synth
-from npstereo.gen.capacity import DEVICES, device, fit_message, usage, utilisation
-from npstereo.gen.synth import synthesise
+from npstereo.gen.flow import nextpnr
+from npstereo.gen.flow.capacity import DEVICES, device, fit_message, usage, utilisation
+from npstereo.gen.flow.synthesise import synthesise
 
 
 def ecp5_utilisation(result):
@@ -100,7 +100,7 @@ def test_lut_count_is_what_nextpnr_packs(tmp_path):
     result = synthesise(CHAINS_AND_LUT_RAM, "ecp5", "top", pnr=True, freq=50, keep=tmp_path)
     assert result["status"] == "ok", result
     assert result["carry_chains"] == 40 and result["lut_rams"] == 1
-    packed = synth._PACKED.search((tmp_path / "place.log").read_text())
+    packed = nextpnr._PACKED.search((tmp_path / "place.log").read_text())
     assert 0 <= int(packed.group(1)) - usage(result, DEVICES["ecp5-85k"])["LUT"] <= 2
 
 

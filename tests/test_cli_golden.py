@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from npstereo.gen.cli import main
+from npstereo.gen.cli.main import main
 from npstereo.params import SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2, StereoParams
 from npstereo.golden import sgm
 from npstereo.golden.pipeline import disparity_map

@@ -10,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from npstereo.gen.cli import main
+from npstereo.gen.cli.main import main
 from npstereo.golden import sgm
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate

@@ -11,7 +11,7 @@ comparison must be reported as mismatching on both simulators.
 import numpy as np
 import pytest
 
-from npstereo.gen.cli import main
+from npstereo.gen.cli.main import main
 from npstereo.hdl import transform as hdl_transform
 from npstereo.hdl import trees
 from npstereo.params import StereoParams

@@ -23,12 +23,13 @@ import pytest
 from distributed import Client
 from PIL import Image
 
-from npstereo.gen import cmd_report, engine
-from npstereo.gen.capacity import DEVICES, fit_message, utilisation
-from npstereo.gen.cli import main
-from npstereo.gen.cmd_explore import conditions, load_scenes, write_outputs
-from npstereo.gen.cmd_match import match_images
-from npstereo.gen.explore import Grid, configurations, explore, pareto_front, plan_tasks, \
+from npstereo.gen.cli.cmd_explore import conditions, load_scenes, write_outputs
+from npstereo.gen.cli.main import main
+from npstereo.gen.explore import engine
+from npstereo.gen.flow.capacity import DEVICES, fit_message, utilisation
+from npstereo.gen.matching import match_images
+from npstereo.gen.reports import synthesis
+from npstereo.gen.explore.explorer import Grid, configurations, explore, pareto_front, plan_tasks, \
     recommend
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
@@ -336,7 +337,7 @@ def test_ecp5_synthesis_is_shared_by_every_part_and_with_report(tmp_path):
     first = plan_tasks([params], {}, DEVICES["ecp5-25k"], False, 150.0, None, cache, None)
     [task] = first.tasks
     task.function(*task.args)                       # on this process: it fills the cache
-    report = cmd_report.lookup(params, ("ecp5",), False, 150.0, cache)["results"]["ecp5"]
+    report = synthesis.lookup(params, ("ecp5",), False, 150.0, cache)["results"]["ecp5"]
     assert report["status"] == "ok" and "device" not in report
     assert report["utilisation"] == utilisation(report, "ecp5-85k")
     for name in ("ecp5-25k", "ecp5-45k", "ecp5-85k"):

@@ -1,9 +1,6 @@
 """PNG output without matplotlib: the embedded turbo table is matplotlib's, pixel for pixel,
 and ``npstereo match`` loads neither matplotlib nor the hardware tool chain."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 from matplotlib import colormaps
@@ -52,19 +49,15 @@ def test_an_off_by_one_table_is_caught(monkeypatch):
         test_maps_look_as_matplotlib_draws_them()
 
 
-def test_match_imports_no_plotting_or_hardware_libraries(tmp_path, small_pair):
+def test_match_imports_no_plotting_or_hardware_libraries(tmp_path, small_pair,
+                                                         libraries_loaded):
     """What keeps ``npstereo match`` fast: it loads only numpy, Pillow and the golden model."""
     from PIL import Image
     left, right = tmp_path / "l.png", tmp_path / "r.png"
     Image.fromarray(small_pair.left).save(left)
     Image.fromarray(small_pair.right).save(right)
-    script = ("import sys; from npstereo.gen.cli import main; "
-              f"code = main(['match', {str(left)!r}, {str(right)!r}, '--block', '3', "
-              f"'--disparities', '16', '--out', {str(tmp_path / 'd.png')!r}]); "
-              "print(sorted({m.split('.')[0] for m in sys.modules} & "
-              "{'matplotlib', 'amaranth', 'cocotb', 'cocotb_tools', 'tqdm'})); "
-              "sys.exit(code)")
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                            timeout=120, check=False)
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.splitlines()[-1] == "[]"
+    code, output, loaded = libraries_loaded(
+        ["match", str(left), str(right), "--block", "3", "--disparities", "16", "--out",
+         str(tmp_path / "d.png")], {"matplotlib", "amaranth", "cocotb", "cocotb_tools", "tqdm"})
+    assert code == 0, output
+    assert loaded == "[]"

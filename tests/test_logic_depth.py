@@ -1,4 +1,4 @@
-"""Logic levels of the worst register-to-register path (``npstereo.gen.logic_depth``).
+"""Logic levels of the worst register-to-register path (``npstereo.gen.flow.logic_depth``).
 
 Small designs whose depth is known: a register feeding a register (0 levels), one gate
 (1 level), an adder (one level plus its carry chain), XOR trees whose depth grows with
@@ -8,8 +8,8 @@ rules are also checked on hand-written netlists, where every number is exact.
 
 import pytest
 
-from npstereo.gen.logic_depth import CARRY_WEIGHT, logic_depth
-from npstereo.gen.synth import synthesise
+from npstereo.gen.flow.logic_depth import CARRY_WEIGHT, logic_depth
+from npstereo.gen.flow.synthesise import synthesise
 
 TARGETS = ["cyclonev", "ecp5"]
 

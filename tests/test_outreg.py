@@ -1,4 +1,4 @@
-"""ECP5 block-RAM output-register packing (``npstereo.gen.outreg``): proved by simulation.
+"""ECP5 block-RAM output-register packing (``npstereo.gen.flow.bram_output_register``): proved by simulation.
 
 Each design is synthesised for ECP5, packed, written back to Verilog by Yosys and simulated
 with Icarus against its RTL on random stimulus, cycle by cycle. Yosys's own DP16KD model is
@@ -16,8 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from npstereo.gen import outreg
-from npstereo.gen.synth import run_yosys, synthesise
+from npstereo.gen.flow import bram_output_register as outreg
+from npstereo.gen.flow.synthesise import synthesise
+from npstereo.gen.flow.yosys import run_yosys
 from npstereo.sim.tools import require
 
 MODEL = Path(__file__).with_name("ecp5_dp16kd_model.v")

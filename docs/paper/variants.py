@@ -21,7 +21,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from PIL import Image
 
-from npstereo.gen.cmd_paper import PAPER_FIG6, BLOCKS
+from npstereo.gen.reports.paper_data import PAPER_BLOCKS, PAPER_FIG6
 from npstereo.golden.data import load_middlebury, to_gray
 from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.params import TRANSFORMS, StereoParams
@@ -88,7 +88,7 @@ def sweep(pair, jobs_n, noise_levels=()):
         for level in noise_levels:
             name = f"BT.601 + noise variance {level:g}"
             grays_l[name], grays_r[name] = gaussian_noise_pair(base_l, base_r, level, seed=0)
-    keys = [(name, t, b) for name in grays_l for t in TRANSFORMS for b in BLOCKS]
+    keys = [(name, t, b) for name in grays_l for t in TRANSFORMS for b in PAPER_BLOCKS]
     jobs = [(grays_l[n], grays_r[n], StereoParams(t, b, D), 0) for n, t, b in keys]
     with ProcessPoolExecutor(jobs_n) as pool:
         maps = dict(zip(keys, pool.map(match, jobs)))
@@ -99,7 +99,7 @@ def sweep(pair, jobs_n, noise_levels=()):
             mads = []
             for t in TRANSFORMS:
                 diffs = []
-                for i, b in enumerate(BLOCKS):
+                for i, b in enumerate(PAPER_BLOCKS):
                     disparity = maps[(name, t, b)]
                     if border != "as defined (zero padding)":
                         disparity = np.where(border_frame(truth.shape, b), -1, disparity)
@@ -150,7 +150,7 @@ def main(argv=None):
         for b in args.blocks:
             base = maps[(t, b, ours)]
             frame = border_frame(truth.shape, b)
-            paper = PAPER_FIG6[t][BLOCKS.index(b)] if b in BLOCKS else None
+            paper = PAPER_FIG6[t][PAPER_BLOCKS.index(b)] if b in PAPER_BLOCKS else None
             results = {name: correct(maps[(t, b, name)], truth)
                        for name in list(grays_l) + ["replicate padding", "no L/R check",
                                                     "L/R threshold 1",
@@ -171,7 +171,7 @@ def main(argv=None):
     variants = list(dict.fromkeys(r["variant"] for r in rows))
     table = {(r["transform"], r["block"], r["variant"]): r["correct"] for r in rows}
     print("| paper | " + " | ".join(
-        f"{PAPER_FIG6[t][BLOCKS.index(b)]:.2f}" if b in BLOCKS else "-"
+        f"{PAPER_FIG6[t][PAPER_BLOCKS.index(b)]:.2f}" if b in PAPER_BLOCKS else "-"
         for t in TRANSFORMS for b in args.blocks) + " |")
     for v in variants:
         print(f"| {v} | " + " | ".join(f"{table[(t, b, v)]:.2f}" for t in TRANSFORMS

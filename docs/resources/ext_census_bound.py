@@ -37,10 +37,10 @@ from pathlib import Path
 from amaranth.back import verilog
 from amaranth.hdl import Elaboratable, Module, Mux, Signal
 
-from npstereo.gen.capacity import DEVICES
-from npstereo.gen.paper_resources import (PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_LOGIC,
-                                          PAPER_MEMORY, PAPER_ROUNDS, PAPER_SIZE)
-from npstereo.gen.synth import synthesise
+from npstereo.gen.flow.capacity import DEVICES
+from npstereo.gen.flow.synthesise import synthesise
+from npstereo.gen.reports.paper_data import (PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_LOGIC,
+                                             PAPER_MEMORY, PAPER_ROUNDS, PAPER_SIZE)
 from npstereo.hdl.trees import build_sad, build_sum, register_plan, sad_plan
 from npstereo.params import LUT_INPUTS
 

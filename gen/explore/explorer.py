@@ -10,11 +10,11 @@ For each configuration of the grid it measures
 - frames per second at the hardware's frame size: Fmax (or the assumed clock without
   place and route) over :func:`~npstereo.hdl.plan.cycles_per_frame`;
 
-and says whether it fits the device (:mod:`.capacity`). The points are then ranked: the
-Pareto front of quality against logic, and the recommendation (the best quality that fits
-the device at the required frame rate).
+and says whether it fits the device (:mod:`npstereo.gen.flow.capacity`). The points are
+then ranked: the Pareto front of quality against logic, and the recommendation (the best
+quality that fits the device at the required frame rate).
 
-Every result is cached (:mod:`.report_cache`): a synthesis under the key of ``npstereo
+Every result is cached (:mod:`npstereo.gen.reports.cache`): a synthesis under the key of ``npstereo
 report`` (the two commands share their results), a quality measurement under a key of
 the configuration, the scene's pixels and the golden model's sources. The client submits
 only what the cache does not hold; a worker that finds a result there returns it.
@@ -29,15 +29,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..golden.quality import evaluate as quality_of
-from ..hdl.plan import check_buildable, cycles_per_frame
-from ..params import ParameterError, StereoParams, UserError
-from .capacity import device as find_device, fit_message, usage, utilisation
-from .cmd_eval import condition_images
-from .cmd_match import match_images
-from .cmd_report import failed_report, lookup, store_report, synthesis_job
+from ...golden.quality import evaluate as quality_of
+from ...hdl.plan import check_buildable, cycles_per_frame
+from ...params import ParameterError, StereoParams, UserError
+from ..atomic import OutputError
+from ..flow.capacity import DEFAULT_DEVICE, device as find_device, fit_message, usage, \
+    utilisation
+from ..matching import match_images
+from ..reports.cache import golden_source_hash, read_result, source_hash, store_result
+from ..reports.synthesis import failed_report, lookup, store_report, synthesis_job
 from .engine import Task, TaskFailure, run_tasks, shared, task_key
-from .report_cache import golden_source_hash, read_result, source_hash, store_result
 
 __all__ = ["Grid", "configurations", "scene_digest", "quality_task", "plan_tasks",
            "explore", "pareto_front", "recommend"]
@@ -61,7 +62,8 @@ class Grid:
     width: int
     height: int
     lr_threshold: int | None = 3
-    #: The device's (:attr:`~.capacity.Device.lut_inputs`), for every configuration.
+    #: The device's (:attr:`npstereo.gen.flow.capacity.Device.lut_inputs`), for every
+    #: configuration.
     lut_inputs: int = 4
 
     _AXES = (("transforms", "--transform"), ("blocks", "--block"), ("rounds", "--rounds"),
@@ -157,7 +159,7 @@ def quality_task(scene, params, cache, key):
     if path is not None:
         try:
             store_result(path, result)
-        except OSError:
+        except (OSError, OutputError):
             pass  # a remote worker that does not share the client's folder
     return result
 
@@ -220,7 +222,7 @@ def _ecp5_part(dev, pnr):
     """The ECP5 part nextpnr places on. Synthesis alone does not depend on the part: its
     result is cached once for every part (checked against the LFE5U-85F as ``npstereo
     report`` checks it) and :func:`_point` measures it against ``dev``."""
-    return dev.name if dev.target == "ecp5" and pnr else "ecp5-85k"
+    return dev.name if dev.target == "ecp5" and pnr else DEFAULT_DEVICE
 
 
 def explore(client, configs, scenes, dev, pnr=False, freq=150.0, timeout=None, cache=None,

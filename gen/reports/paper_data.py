@@ -1,20 +1,44 @@
-"""The paper's resource figures (Ambrosch et al. 2008, Figs. 13 and 14) and its sweep.
+"""The paper's data (Ambrosch et al. 2008): its quality and resource figures, and the
+sweep that puts ours beside them.
 
-Stratix II EP2S180 logic elements and memory bits of the four transforms at block sizes
-7 .. 19 (450 x 375, D = 100, R = 10), the clock the paper states, and the configurations
-``npstereo report --paper`` runs to put ours beside them.
+Correct matches on teddy (Fig. 6 clean, Fig. 8 with gaussian noise), which ``npstereo
+paper`` reproduces; Stratix II EP2S180 logic elements and memory bits of the four
+transforms at block sizes 7 .. 19 (Figs. 13 and 14, 450 x 375, D = 100, R = 10) and the
+clock the paper states, with the configurations ``npstereo report --paper`` runs.
 """
 
 import dataclasses
 
-from ..params import TRANSFORMS, StereoParams
+from ...params import TRANSFORMS, StereoParams
 
-__all__ = ["PAPER_BLOCKS", "PAPER_LOGIC", "PAPER_DID_NOT_FIT", "PAPER_MEMORY", "PAPER_CLOCK",
-           "PAPER_SIZE", "PAPER_DISPARITIES", "PAPER_ROUNDS", "paper_configurations",
-           "is_default_line_buffer", "SAD_TRANSFORMS", "sweep_targets"]
+__all__ = ["PAPER_BLOCKS", "PAPER_FIG6", "PAPER_FIG8", "PAPER_NOISE", "PAPER_LOGIC",
+           "PAPER_DID_NOT_FIT", "PAPER_MEMORY", "PAPER_CLOCK", "PAPER_SIZE",
+           "PAPER_DISPARITIES", "PAPER_ROUNDS", "paper_configurations", "is_default_line_buffer",
+           "SAD_TRANSFORMS", "sweep_targets"]
 
-#: Block sizes of the paper's figures 13 and 14.
+#: Block sizes of the paper's figures 6, 8, 13 and 14.
 PAPER_BLOCKS = (7, 9, 11, 13, 15, 17, 19)
+
+#: Fig. 6, correct matches (%) on teddy, 7x7 .. 19x19 (clean text in the paper's data table).
+PAPER_FIG6 = {
+    "rank": (39.16, 42.17, 43.88, 44.82, 45.27, 45.37, 45.11),
+    "ext-rank": (43.67, 44.73, 44.86, 44.76, 44.27, 43.57, 42.50),
+    "census": (73.22, 76.15, 76.98, 76.91, 76.24, 75.35, 74.49),
+    "ext-census": (74.01, 76.13, 76.06, 75.34, 74.34, 73.17, 72.00),
+}
+
+#: Fig. 8 (teddy, gaussian noise 0.002): best reading of the PDF extraction, which scrambles
+#: the figure's data table. Low confidence; None where no number could be assigned. The
+#: reasoning is in docs/quality.md.
+PAPER_FIG8 = {
+    "rank": (9.02, 9.29, 9.76, 10.37, 11.16, 11.70, None),
+    "ext-rank": (18.01, 18.98, 19.09, 19.14, 19.43, 19.58, None),
+    "census": (26.16, 32.69, 37.57, 44.24, 41.31, 40.42, None),
+    "ext-census": (26.59, 30.68, 33.85, 38.57, 36.31, 30.11, None),
+}
+#: The variance of Fig. 8's gaussian noise (on the [0, 1] scale).
+PAPER_NOISE = 0.002
+
 #: Stratix II logic elements (Fig. 13); None where the design did not fit and no figure exists.
 PAPER_LOGIC = {
     "rank": (10174, 13514, 17475, 21999, 23554, 28686, 34053),

@@ -3,165 +3,37 @@
 One configuration (``--transform ... --width ... --height ...``) prints a table per target;
 ``--paper`` runs the paper's sweep (four transforms x blocks 7..19 at 450 x 375, D = 100,
 R = 10) and writes markdown, JSON and PNG plots. The sweep's configurations are tasks on
-Dask distributed (:mod:`.engine`: an embedded LocalCluster, or ``--scheduler``). Results
-are cached by configuration, generated Verilog and tool versions (:mod:`.report_cache`),
-so a rerun only synthesises what changed.
+Dask distributed (:mod:`npstereo.gen.explore.engine`: an embedded LocalCluster, or
+``--scheduler``). Results are cached by configuration, generated Verilog and tool versions
+(:mod:`npstereo.gen.reports.cache`), so a rerun only synthesises what changed.
 """
 
 import dataclasses
 import json
 import math
-import os
 import sys
 from pathlib import Path
 
+from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
+from ...params import TRANSFORMS, StereoParams, UserError
+from ..atomic import write_text
+from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
+    task_key
+from ..flow.capacity import DEFAULT_DEVICE
+from ..flow.tools import ENGINES, TARGETS, tool_versions
+from ..reports.cache import earlier_reports, seed_cache, source_hash
+from ..reports.paper_data import PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_ROUNDS, PAPER_SIZE, \
+    is_default_line_buffer, paper_configurations, sweep_targets
+from ..reports.plots import sweep_plots
+from ..reports.synthesis import failed_report, lookup, store_report, synthesis_job
+from ..reports.tables import format_table, sweep_markdown
+from .arguments import DEFAULT_CACHE, add_engine_arguments, add_hardware_arguments, \
+    add_matching_arguments, check_output_file, check_output_folder, params_from_args
 
-from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable, cycles_per_frame, memory_bits
-from ..hdl.verilog import TOP_NAME, core_verilog
-from ..params import StereoParams, UserError
-from .atomic import write_text
-from .capacity import fit_message
-from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
-from .engine import Task, TaskFailure, add_engine_arguments, check_engine_arguments, \
-    cluster, run_tasks, task_key
-from .paper_resources import is_default_line_buffer, paper_configurations, \
-    sweep_targets
-from .plots import sweep_plots
-from .report_cache import cache_key, design, earlier_reports, incomplete, memoised_digest, \
-    read_result, seed_cache, source_hash, store_result
-from .report_tables import format_table, sweep_markdown
-from .synth import ENGINES, TARGETS, synthesise, tool_versions
+__all__ = ["DESCRIPTION", "add_arguments", "run", "run_sweep", "synthesis_tasks", "sweep_pnr"]
 
-__all__ = ["add_parser", "run", "evaluate", "lookup", "run_sweep", "store_report",
-           "failed_report", "synthesis_tasks", "synthesis_job"]
-
-#: The part nextpnr places on unless another is asked for.
-_DEFAULT_DEVICE = "ecp5-85k"
-
-
-def _path(cache, params, target, pnr, freq, digest, device):
-    return Path(cache) / f"{cache_key(params, target, pnr, freq, digest, device)}.json"
-
-
-def _report(params, digest, results):
-    return {"params": dataclasses.asdict(params), "verilog_sha": digest,
-            "cycles_per_frame": cycles_per_frame(params),
-            "expected_memory_bits": memory_bits(params), "results": results}
-
-
-def evaluate(params, targets, pnr=False, freq=150.0, timeout=None, cache=None, engine=None,
-             device=_DEFAULT_DEVICE):
-    """Synthesis figures of one configuration for each target, with cycles and frame rate.
-
-    Results that are ``ok`` or ``failed`` are cached in ``cache`` (a folder) when given;
-    timeouts are not, so a longer ``--timeout`` retries them. A memory count that differs
-    from the architecture's (:func:`~npstereo.hdl.plan.memory_bits`) is noted in the
-    result's message. ``device``: the ECP5 part placed on (:mod:`.capacity`).
-    """
-    results = {}
-    cycles = cycles_per_frame(params)
-    expected_bits = memory_bits(params)
-    digest, verilog = design(params, cache)
-    for target in targets:
-        path = None if cache is None else _path(cache, params, target, pnr, freq, digest,
-                                                device)
-        cached = None if path is None else read_result(path)
-        if cached is not None and incomplete(cached):
-            verilog = core_verilog(params) if verilog is None else verilog
-            cached = _completed(cached, verilog, path, timeout, engine, device)
-        if cached is not None:
-            results[target] = cached
-            continue
-        if verilog is None:
-            verilog = core_verilog(params)
-        result = synthesise(verilog, target, TOP_NAME, pnr=pnr, freq=freq, timeout=timeout,
-                            engine=engine, device=device)
-        if target == "ecp5":
-            result.update(pnr=pnr, freq=freq)
-            if device != _DEFAULT_DEVICE:
-                result["device"] = device
-        if result["status"] == "ok" and result["memory_bits"] != expected_bits:
-            result["message"] = (f"memory bits {result['memory_bits']} differ from the "
-                                 f"architecture's {expected_bits}")
-        if result.get("fmax_mhz"):
-            result["frames_per_second"] = result["fmax_mhz"] * 1e6 / cycles
-        if path is not None and result["status"] != "timeout":
-            store_result(path, result)
-        results[target] = dict(result, cached=False)
-    return _report(params, digest, results)
-
-
-def _completed(cached, verilog, path, timeout, engine, device):
-    """A cached ECP5 result that predates the count of carry chains, with the count and
-    the utilisation and verdict that follow from it: synthesised again, not placed (place
-    and route figures are the netlist's, which has not changed). Stored in place of the
-    old one; left as it was if the synthesis does not finish."""
-    fresh = synthesise(verilog, "ecp5", TOP_NAME, timeout=timeout, engine=engine,
-                       device=device)
-    if "carry_chains" not in fresh:
-        return cached
-    result = dict(cached, carry_chains=fresh["carry_chains"],
-                  utilisation=fresh["utilisation"], fits=fresh["fits"])
-    if result["status"] == "does not fit":
-        result["message"] = fit_message(result["utilisation"]) or result["message"]
-    store_result(path, result)
-    return dict(result, cached=False)
-
-
-def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=_DEFAULT_DEVICE,
-           partial=False):
-    """The report :func:`evaluate` would give, from ``cache`` alone (nothing generated or
-    synthesised), or None when any of it is not there. With ``partial``: the targets that
-    are there, or None when none is."""
-    digest = None if cache is None else memoised_digest(params, cache)
-    if digest is None:
-        return None
-    results = {t: read_result(_path(cache, params, t, pnr, freq, digest, device))
-               for t in targets}
-    if partial:
-        results = {t: r for t, r in results.items() if r is not None}
-        return _report(params, digest, results) if results else None
-    if any(r is None or incomplete(r) for r in results.values()):
-        return None
-    return _report(params, digest, results)
-
-
-def store_report(report, cache, pnr, freq, device=_DEFAULT_DEVICE):
-    """Put the cacheable results of a report that a worker computed into ``cache`` (the
-    client's copy: a remote worker may not share this file system)."""
-    if cache is None or not report.get("verilog_sha"):
-        return
-    params = StereoParams(**report["params"])
-    for target, result in report["results"].items():
-        if result["status"] != "timeout" and not result.get("cached"):
-            store_result(_path(cache, params, target, pnr, freq, report["verilog_sha"],
-                               device), result)
-
-
-def failed_report(params, targets, message):
-    """The report of a configuration whose evaluation crashed: every target failed."""
-    return {"params": dataclasses.asdict(params), "cycles_per_frame": None,
-            "expected_memory_bits": memory_bits(params),
-            "results": {t: {"target": t, "status": "failed", "fmax_mhz": None,
-                            "message": message[:200]} for t in targets}}
-
-
-def synthesis_job(params, targets, pnr, freq, timeout, cache, engine,
-                  device=_DEFAULT_DEVICE):
-    """One sweep cell on a worker; never raises, so the sweep goes on.
-
-    The worker uses the shared cache when it can write there (a remote worker may not
-    see the client's folder: the client then keeps the results).
-    """
-    if cache is not None:
-        try:
-            Path(cache).mkdir(parents=True, exist_ok=True)
-        except OSError:
-            cache = None
-    try:
-        return evaluate(params, targets, pnr, freq, timeout, cache, engine, device)
-    except Exception as error:  # a crash in generation is a cell's result, not the sweep's
-        return failed_report(params, targets, f"{type(error).__name__}: {error}")
+DESCRIPTION = ("Synthesise generated cores with Yosys (Cyclone V, ECP5) and nextpnr; report "
+               "logic, registers, RAM, memory bits, Fmax and frame rate.")
 
 
 def _order(params):
@@ -184,7 +56,7 @@ def sweep_pnr(params, pnr):
 
 
 def synthesis_tasks(configurations, targets, pnr, freq, timeout, cache, engine,
-                    device=_DEFAULT_DEVICE):
+                    device=DEFAULT_DEVICE):
     """``(reports from the cache, tasks for the rest)`` of a sweep: one :class:`Task` per
     configuration not wholly in ``cache``: default line buffers first (what a user gets),
     then cheap cells first (ext. census takes many times longer than the other three),
@@ -280,11 +152,7 @@ def _write_sweep(reports, out):
     return [out / "sweep.json", out / "sweep.md"] + sweep_plots(reports, out)
 
 
-def add_parser(subparsers):
-    parser = subparsers.add_parser(
-        "report", help="FPGA resources and clock of a core (Yosys, nextpnr)",
-        description="Synthesise generated cores with Yosys (Cyclone V, ECP5) and nextpnr; "
-                    "report logic, registers, RAM, memory bits, Fmax and frame rate.")
+def add_arguments(parser):
     add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
     add_hardware_arguments(parser)
     parser.add_argument("--width", type=int,
@@ -297,16 +165,19 @@ def add_parser(subparsers):
     parser.add_argument("--freq", type=float, default=150.0,
                         help="nextpnr clock constraint in MHz (default 150)")
     parser.add_argument("--timeout", type=float, default=3600.0,
-                        help="seconds per configuration and target before giving up (default 3600)")
+                        help="seconds per configuration and target before giving up "
+                             "(default 3600)")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
+    width, height = PAPER_SIZE
     parser.add_argument("--paper", action="store_true",
-                        help="the paper's sweep: 4 transforms x blocks 7..19, 450x375, D=100, R=10")
+                        help=f"the paper's sweep: {len(TRANSFORMS)} transforms x blocks "
+                             f"{PAPER_BLOCKS[0]}..{PAPER_BLOCKS[-1]}, {width}x{height}, "
+                             f"D={PAPER_DISPARITIES}, R={PAPER_ROUNDS}")
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("docs/resources"),
                         help="output folder of --paper (default docs/resources)")
-    parser.add_argument("--cache", type=Path,
-                        default=Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
-                        / "npstereo" / "report", help="result cache folder")
+    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
+                        help="result cache folder")
     parser.add_argument("--no-cache", action="store_true", help="synthesise everything again")
     parser.add_argument("--yosys", choices=ENGINES, default=None,
                         help="Yosys engine: native (pyosys, default when installed) or wasm "
@@ -325,13 +196,16 @@ def _check(args):
         raise UserError(f"--freq must be a positive clock in MHz, not {args.freq:g}")
     if args.pnr and args.target == "cyclonev":
         raise UserError("--pnr places and routes for ecp5: use --target ecp5 or all")
-    for path in [args.json] if args.json else []:
-        if path.is_dir():
-            raise UserError(f"--json {path} is a folder, not a file")
+    if args.json is not None:
+        if args.json.is_dir():
+            raise UserError(f"--json {args.json} is a folder, not a file")
+        check_output_file(args.json, "--json")
     if args.paper and (args.width is not None or args.height is not None):
-        raise UserError("--paper uses the paper's 450x375 frames: drop --width/--height")
-    if args.paper and args.out.exists() and not args.out.is_dir():
-        raise UserError(f"--out {args.out} exists and is not a folder")
+        width, height = PAPER_SIZE
+        raise UserError(f"--paper uses the paper's {width}x{height} frames: drop "
+                        "--width/--height")
+    if args.paper:
+        check_output_folder(args.out)
 
 
 def run(args):

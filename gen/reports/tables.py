@@ -1,7 +1,7 @@
 """Text of resource reports: one configuration's table, and the sweep beside the paper."""
 
-from ..params import StereoParams
-from .paper_resources import PAPER_BLOCKS, PAPER_CLOCK, PAPER_DID_NOT_FIT, PAPER_LOGIC, \
+from ...params import StereoParams
+from .paper_data import PAPER_BLOCKS, PAPER_CLOCK, PAPER_DID_NOT_FIT, PAPER_LOGIC, \
     PAPER_MEMORY, SAD_TRANSFORMS, is_default_line_buffer
 
 __all__ = ["format_table", "sweep_markdown"]
@@ -147,7 +147,7 @@ def sweep_markdown(reports):
             _cell(cv, "block_rams"), _cell(cv, "memory_bits"), f"{memory:,}",
             _ratio(cv["memory_bits"], memory) if ok else "-", _levels(cv)]) + " |")
         if e5 is None and p.get("lut_inputs", 4) == 6:
-            continue    # not for the ECP5's 4-input LUTs (paper_resources.sweep_targets)
+            continue    # not for the ECP5's 4-input LUTs (paper_data.sweep_targets)
         fmax, fps = _clock(e5)
         lut = e5.get("utilisation", {}) or {} if e5 else {}
         clock.append("| " + " | ".join([
@@ -174,7 +174,7 @@ def sweep_markdown(reports):
 
 def _router_note(result):
     """Said beside a critical path when nextpnr routed without timing-driven rip-up, or
-    with the clock on a pin the flow chose (:data:`~npstereo.gen.synth.CLOCK_PIN`)."""
+    with the clock on a pin the flow chose (:data:`~npstereo.gen.flow.nextpnr.CLOCK_PIN`)."""
     notes = [result.get("ripup_abandoned")]
     if result.get("clock_pin"):
         notes.append(f"clock on pin {result['clock_pin']}: the placer's pad could not "

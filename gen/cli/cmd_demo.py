@@ -11,18 +11,24 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..golden import sgm
-from ..golden.quality import evaluate
-from ..golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
-from ..hdl.verilog import core_verilog
-from ..params import TRANSFORMS, StereoParams
-from ..sim.cosim import run_frame
-from .atomic import write_text
-from .cmd_cosim import print_verdict
-from .cmd_match import check_output_folder, match_images, output_errors
-from .images import save_disparity_png, save_gray_png
+from ...golden import sgm
+from ...golden.quality import evaluate
+from ...golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
+from ...hdl.verilog import core_verilog
+from ...params import TRANSFORMS, StereoParams
+from ...sim.cosim import run_frame
+from ..atomic import write_text
+from ..images import save_disparity_png, save_gray_png
+from ..matching import match_images
+from .arguments import STEREO_DEFAULTS, check_output_folder
+from .verdict import print_verdict
 
-__all__ = ["add_parser", "run", "golden_demo"]
+__all__ = ["DESCRIPTION", "add_arguments", "run", "golden_demo", "hardware_demo"]
+
+DESCRIPTION = ("Golden-model disparity maps of all four transforms (3x3 aggregation) and of "
+               "semi-global aggregation (census 7x7, the SGM defaults) on the seeded "
+               "synthetic scene, with ground truth and correct matches; then the Verilog of a "
+               "census core for the scene, co-simulated under Verilator bit for bit.")
 
 
 #: File name (without .png) of the semi-global map beside the transforms' box maps.
@@ -107,8 +113,7 @@ def hardware_demo(out, transform="census", block=9, rounds=4, seed=0):
 def run(args):
     check_output_folder(args.out)
     StereoParams(block=args.block, disparities=DEFAULT_DISPARITIES)
-    with output_errors():
-        rows = golden_demo(args.out, block=args.block, seed=args.seed)
+    rows = golden_demo(args.out, block=args.block, seed=args.seed)
     print(f"golden model on the synthetic scene (seed {args.seed}), D={DEFAULT_DISPARITIES}, "
           f"L/R check T=3:")
     for row in rows:
@@ -120,25 +125,18 @@ def run(args):
         return 0
     print(f"generating the census {args.block}x{args.block} core (R=4) and co-simulating the "
           f"frame under Verilator (the first build takes a minute or two) ...")
-    with output_errors():
-        result, params = hardware_demo(args.out, block=args.block, seed=args.seed)
+    result, params = hardware_demo(args.out, block=args.block, seed=args.seed)
     _, comparison = result.frames[0]
     print(f"hardware ({params.describe()}): {args.out}/core.v, map {args.out}/hardware.png")
     print_verdict(comparison, result.cycles, params.width * params.height)
     return 0 if comparison.ok else 1
 
 
-def add_parser(subparsers):
-    parser = subparsers.add_parser(
-        "demo", help="run everything on the embedded synthetic scene",
-        description="Golden-model disparity maps of all four transforms (3x3 aggregation) "
-                    "and of semi-global aggregation (census 7x7, the SGM defaults) on the "
-                    "seeded synthetic scene, with ground truth and correct matches; then the "
-                    "Verilog of a census core for the scene, co-simulated under Verilator bit "
-                    "for bit.")
+def add_arguments(parser):
     parser.add_argument("--out", default="build/demo", help="output folder (default build/demo)")
-    parser.add_argument("--block", type=int, default=9,
-                        help="transform block size of the box maps (default 9)")
+    parser.add_argument("--block", type=int, default=STEREO_DEFAULTS["block"],
+                        help=f"transform block size of the box maps "
+                             f"(default {STEREO_DEFAULTS['block']})")
     parser.add_argument("--seed", type=int, default=0, help="scene seed (default 0)")
     parser.add_argument("--no-hardware", action="store_true",
                         help="golden model only: skip Verilog generation and co-simulation")

@@ -1,7 +1,7 @@
 """Worker process that runs a Yosys script in native Yosys (PyPI ``pyosys``).
 
-``python -m npstereo.gen.yosys_worker SCRIPT`` runs the commands of ``SCRIPT`` (one per
-line, as :func:`npstereo.gen.synth` writes them) on one design in this process and logs
+``python -m npstereo.gen.flow.yosys_worker SCRIPT`` runs the commands of ``SCRIPT`` (one per
+line, as :mod:`npstereo.gen.flow.yosys` writes them) on one design in this process and logs
 to standard output, which the caller sends to ``yosys.log``.
 
 Why a process of its own: libyosys runs in the calling process and cannot be interrupted,
@@ -56,7 +56,7 @@ def _time_summary(times):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m npstereo.gen.yosys_worker",
+    parser = argparse.ArgumentParser(prog="python -m npstereo.gen.flow.yosys_worker",
                                      description=__doc__.splitlines()[0])
     parser.add_argument("script", help="Yosys script, one command per line")
     args = parser.parse_args(argv)

@@ -2,31 +2,38 @@
 clock of a grid, every evaluation a task on Dask distributed.
 
 Writes ``explore.json`` (every point, the Pareto front, the recommendation, the device
-table), ``explore.md`` and ``pareto.png`` into ``--out``; :mod:`.explore` does the work,
-:mod:`.engine` runs it (an embedded LocalCluster, or ``--scheduler``).
+table), ``explore.md`` and ``pareto.png`` into ``--out``; :mod:`npstereo.gen.explore.explorer`
+does the work, :mod:`npstereo.gen.explore.engine` runs it (an embedded LocalCluster, or
+``--scheduler``).
 """
 
 import json
 import math
-import os
 import sys
 import time
 from pathlib import Path
 
-from ..golden.data import load_middlebury
-from ..golden.synthetic import synthetic_pair
-from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES
-from ..params import LINE_BUFFERS, TRANSFORMS, UserError
-from .atomic import write_text
-from .capacity import DEVICES
-from .cmd_eval import Condition, condition_images
-from .cmd_match import check_output_folder, output_errors
-from .engine import add_engine_arguments, check_engine_arguments, cluster
-from .explore import Grid, configurations, explore
-from .plots import pareto_plot
-from .synth import ENGINES, tool_versions
+from ...golden.data import load_middlebury
+from ...golden.synthetic import synthetic_pair
+from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES
+from ...params import LINE_BUFFERS, TRANSFORMS, UserError
+from ..atomic import write_text
+from ..explore.engine import check_engine_arguments, cluster
+from ..explore.explorer import Grid, configurations, explore
+from ..flow.capacity import DEVICES
+from ..flow.tools import ENGINES, tool_versions
+from ..matching import Condition, condition_images
+from ..reports.plots import pareto_plot
+from .arguments import DEFAULT_CACHE, STEREO_DEFAULTS, add_engine_arguments, \
+    add_lr_arguments, check_output_folder
 
-__all__ = ["add_parser", "run", "conditions", "load_scenes", "write_outputs"]
+__all__ = ["DESCRIPTION", "add_arguments", "run", "conditions", "load_scenes", "write_outputs"]
+
+DESCRIPTION = ("Evaluate a grid of configurations on a scene (correct matches, clean and "
+               "degraded) and in synthesis for a device (logic, registers, memory bits, logic "
+               "depth; nextpnr Fmax with --pnr), every evaluation a task on Dask distributed; "
+               "write explore.json, explore.md and pareto.png with the Pareto front and a "
+               "recommendation.")
 
 
 def _aggregation(text):
@@ -202,8 +209,7 @@ def run(args):
                 "clock_mhz": args.clock, "min_fps": args.min_fps, "skipped": skipped,
                 "tools": tool_versions(), "engine": engine,
                 "seconds": round(time.monotonic() - started, 1), **result}
-    with output_errors():
-        written = write_outputs(document, args.out)
+    written = write_outputs(document, args.out)
     choice = result["recommendation"]
     if choice is None:
         print(f"no recommendation: {result['recommendation_reason']}")
@@ -217,35 +223,31 @@ def run(args):
     return 1 if result["tasks"]["failed"] else 0
 
 
-def add_parser(subparsers):
-    parser = subparsers.add_parser(
-        "explore", help="quality x logic x memory x clock of a grid for one device (Dask)",
-        description="Evaluate a grid of configurations on a scene (correct matches, clean "
-                    "and degraded) and in synthesis for a device (logic, registers, memory "
-                    "bits, logic depth; nextpnr Fmax with --pnr), every evaluation a task "
-                    "on Dask distributed; write explore.json, explore.md and pareto.png "
-                    "with the Pareto front and a recommendation.")
+def add_arguments(parser):
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--dataset", metavar="DIR", help="Middlebury scene folder")
     source.add_argument("--synthetic", action="store_true",
                         help="the synthetic scene at --width x --height (seeded by --seed)")
     parser.add_argument("--transform", nargs="*", choices=TRANSFORMS, default=list(TRANSFORMS),
                         help="transforms of the grid (default all four)")
-    parser.add_argument("--block", nargs="*", type=int, default=[9],
+    parser.add_argument("--block", nargs="*", type=int, default=[STEREO_DEFAULTS["block"]],
                         help=f"block sizes B of the grid, odd >= 3, at most {MAX_BLOCK} "
-                             "(default 9)")
-    parser.add_argument("--rounds", nargs="*", type=int, default=[1],
-                        help="calculation rounds R of the grid, each dividing D (default 1)")
-    parser.add_argument("--aggregation", nargs="*", type=_aggregation, default=[3],
-                        help="aggregation windows A of the grid, odd >= 1 (default 3)")
-    parser.add_argument("--line-buffer", nargs="*", choices=LINE_BUFFERS, default=["auto"],
-                        help="rows above kept as transforms or costs (default auto)")
-    parser.add_argument("--disparities", type=int, default=100,
-                        help=f"disparity range D, at most {MAX_DISPARITIES} (default 100)")
-    lr = parser.add_mutually_exclusive_group()
-    lr.add_argument("--lr-threshold", type=int, default=3,
-                    help="left/right consistency threshold T >= 0 (default 3)")
-    lr.add_argument("--no-lr-check", action="store_true", help="skip the left/right check")
+                             f"(default {STEREO_DEFAULTS['block']})")
+    parser.add_argument("--rounds", nargs="*", type=int, default=[STEREO_DEFAULTS["rounds"]],
+                        help=f"calculation rounds R of the grid, each dividing D "
+                             f"(default {STEREO_DEFAULTS['rounds']})")
+    parser.add_argument("--aggregation", nargs="*", type=_aggregation,
+                        default=[STEREO_DEFAULTS["aggregation"]],
+                        help=f"aggregation windows A of the grid, odd >= 1 "
+                             f"(default {STEREO_DEFAULTS['aggregation']})")
+    parser.add_argument("--line-buffer", nargs="*", choices=LINE_BUFFERS,
+                        default=[STEREO_DEFAULTS["line_buffer"]],
+                        help=f"rows above kept as transforms or costs "
+                             f"(default {STEREO_DEFAULTS['line_buffer']})")
+    parser.add_argument("--disparities", type=int, default=STEREO_DEFAULTS["disparities"],
+                        help=f"disparity range D, at most {MAX_DISPARITIES} "
+                             f"(default {STEREO_DEFAULTS['disparities']})")
+    add_lr_arguments(parser)
     parser.add_argument("--width", type=int, required=True,
                         help="frame width of the hardware (and of the synthetic scene)")
     parser.add_argument("--height", type=int, required=True,
@@ -273,9 +275,7 @@ def add_parser(subparsers):
                         help="Yosys engine (default native when installed)")
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="output folder")
-    parser.add_argument("--cache", type=Path,
-                        default=Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
-                        / "npstereo" / "report",
+    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
                         help="result cache folder, shared with npstereo report")
     parser.add_argument("--no-cache", action="store_true", help="evaluate everything again")
     parser.set_defaults(run=run)

@@ -22,7 +22,7 @@ with no other change. What Dask gives and the commands rely on:
   sent once, and computed again from the graph if the worker holding it dies.
 
 Results are cached by the callers in a file cache that the workers share
-(:mod:`.report_cache`): a task that finds its result there returns it at once, and the
+(:mod:`npstereo.gen.reports.cache`): a task that finds its result there returns it at once, and the
 client does not submit what it finds there itself.
 """
 
@@ -34,15 +34,14 @@ import os
 import sys
 from dataclasses import dataclass
 
-import dask
-from distributed import Client, LocalCluster, wait
-from tqdm import tqdm
-
-from ..params import UserError
+from ...params import UserError
 
 __all__ = ["CONNECT_TIMEOUT", "ALLOWED_FAILURES", "RETRIES", "Task", "TaskFailure",
-           "task_key", "shared", "cluster", "run_tasks", "add_engine_arguments",
-           "check_engine_arguments"]
+           "task_key", "shared", "cluster", "run_tasks", "check_engine_arguments"]
+
+# dask and distributed are imported in the functions that use them: together they take a
+# second to import, and ``npstereo report`` of one configuration (which imports this
+# module with the command) never starts a cluster.
 
 #: Seconds to reach a user's scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT = 5
@@ -90,18 +89,9 @@ def shared(value, key):
     It is given the highest priority, so that the tasks waiting for it are not held back
     behind the rest of the run.
     """
+    import dask
     with dask.annotate(priority=_FIRST):
         return dask.delayed(value, name=key, pure=True)
-
-
-def add_engine_arguments(parser, default_workers="one per core"):
-    """``--scheduler`` and ``--workers`` of the commands that run on the engine."""
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="address of a running Dask scheduler (tcp://host:8786); "
-                             "default: an embedded LocalCluster on this machine")
-    parser.add_argument("--workers", "--jobs", dest="workers", type=int, default=None,
-                        help=f"worker processes of the embedded cluster (default "
-                             f"{default_workers}; --jobs is the older name)")
 
 
 def check_engine_arguments(workers, scheduler):
@@ -122,6 +112,8 @@ def cluster(scheduler=None, workers=None):
     Raises a one-line :class:`UserError` when ``scheduler`` does not answer within
     :data:`CONNECT_TIMEOUT` seconds or shows no worker within :data:`WORKER_TIMEOUT`.
     """
+    import dask
+    from distributed import Client, LocalCluster
     check_engine_arguments(workers, scheduler)
     if scheduler is not None:
         try:
@@ -185,6 +177,9 @@ def run_tasks(client, tasks, desc, on_result=None):
     dict
         Task key -> result or :class:`TaskFailure`.
     """
+    import dask
+    from distributed import wait
+    from tqdm import tqdm
     tasks = list(tasks)
     if len({t.key for t in tasks}) != len(tasks):
         raise ValueError("task keys must be unique")

@@ -6,7 +6,7 @@ minutes to say so (or hangs in the router); the check here answers from the synt
 counts at once. ``npstereo explore`` says of every configuration "fits" or "does not fit
 (112 % LUT)" for the user's device.
 
-Each device is measured by one synthesis target (:data:`npstereo.gen.synth.TARGETS`): the
+Each device is measured by one synthesis target (:data:`.tools.TARGETS`): the
 ECP5 parts by ``synth_ecp5`` (and ``nextpnr-ecp5`` for the clock), the Cyclone V by
 ``synth_intel_alm``. The paper's Stratix II EP2S180 has no open synthesis flow: it is
 measured by the Cyclone V flow as a stand-in (both are ALM architectures of two ALUTs and
@@ -16,9 +16,10 @@ design's own and exact).
 
 from dataclasses import dataclass
 
-from ..params import UserError
+from ...params import UserError
 
-__all__ = ["Resource", "Device", "DEVICES", "device", "usage", "utilisation", "fit_message"]
+__all__ = ["Resource", "Device", "DEVICES", "DEFAULT_DEVICE", "device", "usage", "utilisation",
+           "fit_message"]
 
 _ECP5_SHEET = "Lattice FPGA-DS-02012 (ECP5 and ECP5-5G Family Data Sheet), Table 1.1"
 _NEXTPNR = ("nextpnr-ecp5 device database ('Device utilisation' report of "
@@ -137,6 +138,10 @@ DEVICES = {d.name: d for d in (
              "estimate, memory bits exact)"),
 )}
 
+#: The ECP5 part a result is checked against and nextpnr places on unless another is asked
+#: for: the LFE5U-85F, the largest ECP5.
+DEFAULT_DEVICE = "ecp5-85k"
+
 #: LUT4 sites a TRELLIS_DPR16X4 takes away from logic: slices 0 and 1 of a PFU for the
 #: RAM and slice 2 for its write port (ECP5 data sheet, section 2.2.1).
 _LUTS_PER_DPR16X4 = 6
@@ -180,7 +185,7 @@ def utilisation(result, dev):
     Parameters
     ----------
     result : dict
-        A result of :func:`npstereo.gen.synth.synthesise` (``logic`` in the target's LUT
+        A result of :func:`.synthesise.synthesise` (``logic`` in the target's LUT
         unit, ``registers``, ``block_rams``, ``lut_rams``, ``dsps``, ``memory_bits``).
     dev : Device or str
     """

@@ -2,21 +2,27 @@
 
 matplotlib figures (no pyplot state), written through :mod:`npstereo.gen.atomic` so an
 interrupted command never leaves a torn PNG behind. Single disparity maps and gray images
-are written by :mod:`.images`, without matplotlib.
+are written by :mod:`npstereo.gen.images`, without matplotlib.
 """
 
 from pathlib import Path
 
 import numpy as np
-from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter
 
-from ..params import TRANSFORMS
-from .atomic import atomic_path
-from .images import colour_disparity
-from .paper_resources import PAPER_BLOCKS, PAPER_CLOCK, PAPER_LOGIC, PAPER_MEMORY
+from ...params import TRANSFORMS
+from ..atomic import atomic_path
+from ..images import colour_disparity
+from .paper_data import PAPER_BLOCKS, PAPER_CLOCK, PAPER_LOGIC, PAPER_MEMORY
 
 __all__ = ["save_figure", "plot_series", "disparity_grid", "sweep_plots", "pareto_plot"]
+
+
+def _figure(**options):
+    """A matplotlib ``Figure``. matplotlib is imported here, when a plot is drawn: it takes
+    over a second to import, and ``npstereo report`` of one configuration imports this
+    module without drawing anything."""
+    from matplotlib.figure import Figure
+    return Figure(**options)
 
 
 def save_figure(path, figure):
@@ -31,7 +37,7 @@ def plot_series(path, title, x_labels, measured, reference=None, ylabel="correct
     ``measured`` and ``reference`` map a series name to one value per x label; reference
     values may be None where the paper's number is not readable.
     """
-    figure = Figure(figsize=(6.4, 4.2))
+    figure = _figure(figsize=(6.4, 4.2))
     axes = figure.add_subplot()
     x = np.arange(len(x_labels))
     for index, (name, values) in enumerate(measured.items()):
@@ -56,8 +62,8 @@ def disparity_grid(path, title, columns, rows, max_disparity):
     first = next(m for _, maps in rows for m in maps if m is not None)
     height, width = np.asarray(first).shape[:2]
     cell = 2.2
-    figure = Figure(figsize=(len(columns) * cell, len(rows) * cell * height / width + 0.5),
-                    layout="constrained")
+    figure = _figure(figsize=(len(columns) * cell, len(rows) * cell * height / width + 0.5),
+                     layout="constrained")
     for r, (label, maps) in enumerate(rows):
         for c, disparity in enumerate(maps):
             axes = figure.add_subplot(len(rows), len(columns), r * len(columns) + c + 1)
@@ -102,7 +108,7 @@ def sweep_plots(reports, out):
                        r["params"].get("lut_inputs", 4)) for r in reports})
     written = []
     for name, target, key, figures, label in panels:
-        figure = Figure(figsize=(7.5, 6.8))
+        figure = _figure(figsize=(7.5, 6.8))
         axes = figure.add_subplot()
         for transform in TRANSFORMS:
             for buffer, lut in buffers:
@@ -153,24 +159,26 @@ def pareto_plot(path, points, labels, front, recommended, device, colour_key, co
     path : path
         The PNG to write.
     points : list of dict
-        Explorer points (:func:`npstereo.gen.explore.explore`): ``logic``, ``memory_bits``,
-        ``fits``, the clean quality first in ``quality``, and ``colour_key``.
+        Explorer points (:func:`npstereo.gen.explore.explorer.explore`): ``logic``,
+        ``memory_bits``, ``fits``, the clean quality first in ``quality``, and
+        ``colour_key``.
     labels : list of str
         A short name per point, written beside it.
     front : list of int
         Indices of the Pareto front (drawn as a staircase).
     recommended : int or None
         Index of the recommendation (ringed).
-    device : npstereo.gen.capacity.Device
+    device : npstereo.gen.flow.capacity.Device
         Its logic capacity is the vertical line.
     colour_key, colour_label : str
         The point field that colours the points (Fmax, or the logic depth without place
         and route) and its colour-bar label.
     title : str
     """
+    from matplotlib.ticker import FuncFormatter
     shown = [i for i, p in enumerate(points) if p["logic"] is not None
              and next(iter(p["quality"].values())).get("correct") is not None]
-    figure = Figure(figsize=(8.8, 5.6))
+    figure = _figure(figsize=(8.8, 5.6))
     axes = figure.add_subplot()
     logic = np.array([points[i]["logic"] for i in shown], dtype=float)
     quality = np.array([next(iter(points[i]["quality"].values()))["correct"] for i in shown])

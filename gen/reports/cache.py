@@ -12,16 +12,18 @@ import hashlib
 import json
 from pathlib import Path
 
-from ..hdl.verilog import core_verilog
-from ..params import StereoParams
-from .atomic import write_text
-from .synth import tool_versions
+from ...hdl.verilog import core_verilog
+from ...params import StereoParams
+from ..atomic import write_text
+from ..flow.capacity import DEFAULT_DEVICE
+from ..flow.tools import tool_versions
 
 __all__ = ["source_hash", "golden_source_hash", "verilog_digest", "configuration_digest",
            "design", "memoised_digest", "cache_key", "seed_cache", "earlier_reports",
            "read_result", "store_result", "incomplete"]
 
-_PACKAGE = Path(__file__).resolve().parent.parent
+#: The npstereo package's folder (this file is npstereo/gen/reports/cache.py).
+_PACKAGE = Path(__file__).resolve().parents[2]
 #: What the generated Verilog is made from: the HDL and the parameter object.
 _SOURCES = (_PACKAGE / "hdl", _PACKAGE / "params")
 #: What a disparity map is made from: the golden model and the parameter object.
@@ -95,18 +97,18 @@ def configuration_digest(params, cache=None):
     return design(params, cache)[0]
 
 
-def cache_key(params, target, pnr, freq, digest, device="ecp5-85k"):
+def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE):
     """Key of one result: configuration, target, tools and the Verilog's digest, and for
     ECP5 place and route the clock constraint and the part (the LFE5U-85F's results keep
     the key they had before other parts could be placed on)."""
     if target != "ecp5" or not pnr:
-        pnr, freq, device = False, None, "ecp5-85k"  # only nextpnr depends on them
+        pnr, freq, device = False, None, DEFAULT_DEVICE  # only nextpnr depends on them
     # ``auto`` is the line buffer it chooses: a single report with the default and the
     # paper sweep's explicit choice are one netlist, and one result.
     params = dataclasses.replace(params, line_buffer=params.stored_rows)
     key = {"params": repr(params), "target": target, "pnr": pnr, "freq": freq,
            "tools": tool_versions(), "verilog": digest}
-    if device != "ecp5-85k":
+    if device != DEFAULT_DEVICE:
         key["device"] = device
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
 
@@ -132,7 +134,8 @@ def store_result(path, result):
 def incomplete(result):
     """Whether a cached ECP5 result predates the count of carry chains: its LUT
     utilisation leaves out the four LUT sites nextpnr packs into every chain
-    (:mod:`.capacity`), so its synthesis is run again, without place and route."""
+    (:mod:`npstereo.gen.flow.capacity`), so its synthesis is run again, without place and
+    route."""
     return result.get("target") == "ecp5" and "logic" in result and \
         "carry_chains" not in result
 

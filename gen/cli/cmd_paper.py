@@ -13,39 +13,24 @@ from pathlib import Path
 
 import numpy as np
 
-from ..golden import sgm
-from ..golden.data import load_middlebury
-from ..golden.quality import evaluate
-from ..golden.synthetic import synthetic_pair
-from ..params import SGM, TRANSFORMS, StereoParams, UserError
-from .atomic import write_text
-from .cmd_eval import Condition, condition_images, run_jobs
-from .cmd_match import check_output_folder, output_errors
-from .images import save_disparity_png
-from .plots import disparity_grid, plot_series
+from ...golden import sgm
+from ...golden.data import load_middlebury
+from ...golden.quality import evaluate
+from ...golden.synthetic import synthetic_pair
+from ...params import SGM, TRANSFORMS, StereoParams, UserError
+from ..atomic import write_text
+from ..images import save_disparity_png
+from ..matching import Condition, condition_images, run_jobs
+from ..reports.paper_data import PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_FIG6, PAPER_FIG8, \
+    PAPER_NOISE
+from ..reports.plots import disparity_grid, plot_series
+from .arguments import check_output_folder
 
-__all__ = ["add_parser", "run", "PAPER_FIG6", "PAPER_FIG8", "BLOCKS", "paper_sweep",
-           "sgm_configurations"]
+__all__ = ["DESCRIPTION", "add_arguments", "run", "paper_sweep", "sgm_configurations"]
 
-BLOCKS = (7, 9, 11, 13, 15, 17, 19)
-
-#: Fig. 6, correct matches (%) on teddy, 7x7 .. 19x19 (clean text in the paper's data table).
-PAPER_FIG6 = {
-    "rank": (39.16, 42.17, 43.88, 44.82, 45.27, 45.37, 45.11),
-    "ext-rank": (43.67, 44.73, 44.86, 44.76, 44.27, 43.57, 42.50),
-    "census": (73.22, 76.15, 76.98, 76.91, 76.24, 75.35, 74.49),
-    "ext-census": (74.01, 76.13, 76.06, 75.34, 74.34, 73.17, 72.00),
-}
-
-#: Fig. 8 (teddy, gaussian noise 0.002): best reading of the PDF extraction, which scrambles
-#: the figure's data table. Low confidence; None where no number could be assigned. The
-#: reasoning is in docs/quality.md.
-PAPER_FIG8 = {
-    "rank": (9.02, 9.29, 9.76, 10.37, 11.16, 11.70, None),
-    "ext-rank": (18.01, 18.98, 19.09, 19.14, 19.43, 19.58, None),
-    "census": (26.16, 32.69, 37.57, 44.24, 41.31, 40.42, None),
-    "ext-census": (26.59, 30.68, 33.85, 38.57, 36.31, 30.11, None),
-}
+DESCRIPTION = ("Sweep all four transforms over the paper's block sizes on a Middlebury scene, "
+               "clean, with gaussian noise and with the bayer stand-in; write README.md, PNG "
+               "plots and results.json to --out.")
 
 #: Bayer stand-in of an uncorrected sensor: unbalanced channel gains, as a camera without
 #: white balance delivers them, and read noise in 8-bit levels. The plain mosaic runs too.
@@ -188,20 +173,20 @@ def run(args):
                        Condition(bayer=True, gains=BAYER_GAINS, read_noise=BAYER_READ_NOISE,
                                  seed=args.seed)]
     rows, maps, sgm_rows = paper_sweep(pair, conditions, blocks, args.disparities, args.jobs)
-    with output_errors():
-        _write_report(args, pair, conditions, blocks, rows, maps, sgm_rows)
+    _write_report(args, pair, conditions, blocks, rows, maps, sgm_rows)
 
 
 def _write_report(args, pair, conditions, blocks, rows, maps, sgm_rows):
     """README.md, plots, Fig. 12 grid and results.json of a finished sweep."""
     # Compare with the paper only for its own configuration (teddy blocks 7..19, D=100).
-    is_paper = blocks == BLOCKS and args.disparities == 100 and not args.synthetic
+    is_paper = (blocks == PAPER_BLOCKS and args.disparities == PAPER_DISPARITIES
+                and not args.synthetic)
     out = Path(args.out)
     labels = [f"{b}x{b}" for b in blocks]
     sections, summary = [], {}
     figures = [("fig6", "Fig. 6: correct matches (%), clean", conditions[0], PAPER_FIG6),
                ("fig8", f"Fig. 8: correct matches (%), gaussian noise {args.noise:g}",
-                conditions[1], PAPER_FIG8 if args.noise == 0.002 else None)]
+                conditions[1], PAPER_FIG8 if args.noise == PAPER_NOISE else None)]
     figures += [(f"bayer{i}", f"Bayer stand-in ({c.label}) in place of Figs. 10-11", c, None)
                 for i, c in enumerate(conditions[2:], 1)]
     for key, title, condition, reference in figures:
@@ -261,21 +246,19 @@ def _write_report(args, pair, conditions, blocks, rows, maps, sgm_rows):
     print(f"wrote {out / 'README.md'}")
 
 
-def add_parser(subparsers):
-    parser = subparsers.add_parser(
-        "paper", help="regenerate the paper's quality figures (Figs. 6, 8, 10-12)",
-        description="Sweep all four transforms over the paper's block sizes on a Middlebury "
-                    "scene, clean, with gaussian noise and with the bayer stand-in; write "
-                    "README.md, PNG plots and results.json to --out.")
+def add_arguments(parser):
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--dataset", metavar="DIR", help="Middlebury scene folder (teddy)")
     source.add_argument("--synthetic", action="store_true", help="the embedded synthetic scene")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
-    parser.add_argument("--blocks", type=int, nargs="+", default=list(BLOCKS),
-                        help="block sizes (default 7 9 .. 19)")
-    parser.add_argument("--disparities", type=int, default=100, help="D (default 100)")
-    parser.add_argument("--noise", type=float, default=0.002,
-                        help="gaussian noise variance of the Fig. 8 sweep (default 0.002)")
+    parser.add_argument("--blocks", type=int, nargs="+", default=list(PAPER_BLOCKS),
+                        help=f"block sizes (default {PAPER_BLOCKS[0]} {PAPER_BLOCKS[1]} .. "
+                             f"{PAPER_BLOCKS[-1]})")
+    parser.add_argument("--disparities", type=int, default=PAPER_DISPARITIES,
+                        help=f"D (default {PAPER_DISPARITIES})")
+    parser.add_argument("--noise", type=float, default=PAPER_NOISE,
+                        help=f"gaussian noise variance of the Fig. 8 sweep "
+                             f"(default {PAPER_NOISE:g})")
     parser.add_argument("--seed", type=int, default=0, help="seed of the degradations")
     parser.set_defaults(run=run)

@@ -37,7 +37,7 @@ import json
 from collections import Counter, defaultdict
 from pathlib import Path
 
-from .atomic import write_text
+from ..atomic import write_text
 
 __all__ = ["pack_outreg", "pack_outreg_file", "read_ports"]
 

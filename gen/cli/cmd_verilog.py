@@ -1,21 +1,21 @@
 """``npstereo verilog``: write the synthesizable Verilog of one core."""
 
 import sys
-from pathlib import Path
 
-from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
-from ..hdl.verilog import core_verilog
-from ..params import UserError
-from .atomic import write_text
-from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
+from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
+from ...hdl.verilog import core_verilog
+from ..atomic import write_text
+from .arguments import add_hardware_arguments, add_matching_arguments, check_output_file, \
+    params_from_args
 
-__all__ = ["add_parser", "run"]
+__all__ = ["DESCRIPTION", "add_arguments", "run"]
+
+DESCRIPTION = ("Elaborate the streaming stereo core (npstereo_core, AXI4-Stream video ports) "
+               "for one configuration and write it as Verilog.")
 
 
 def run(args):
-    out = Path(args.out)
-    if out.is_dir():
-        raise UserError(f"--out {args.out} is a directory")
+    out = check_output_file(args.out)
     # Validated before any elaboration: a bad or oversized configuration never starts
     # the generator.
     params = params_from_args(args).with_size(args.width, args.height)
@@ -26,11 +26,7 @@ def run(args):
     print(f"{params.describe()}: {out}")
 
 
-def add_parser(subparsers):
-    parser = subparsers.add_parser(
-        "verilog", help="generate the Verilog of a stereo core",
-        description="Elaborate the streaming stereo core (npstereo_core, AXI4-Stream video "
-                    "ports) for one configuration and write it as Verilog.")
+def add_arguments(parser):
     add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
     add_hardware_arguments(parser)
     parser.add_argument("--width", type=int, required=True,

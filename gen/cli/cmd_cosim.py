@@ -13,16 +13,23 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..golden.data import load_middlebury, to_gray
-from ..golden.pipeline import disparity_map
-from ..golden.synthetic import synthetic_pair
-from ..hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
-from ..params import UserError
-from ..sim.cosim import SIMULATORS, CosimError, run_frame
-from .cmd_match import add_hardware_arguments, add_matching_arguments, params_from_args
-from .images import save_disparity_png
+from ...golden.data import load_middlebury, to_gray
+from ...golden.pipeline import disparity_map
+from ...golden.synthetic import synthetic_pair
+from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
+from ...params import UserError
+from ...sim.cosim import SIMULATORS, CosimError, run_frame
+from ..images import save_disparity_png
+from .arguments import add_hardware_arguments, add_matching_arguments, check_output_folder, \
+    params_from_args
+from .verdict import print_verdict
 
-__all__ = ["add_parser", "run", "parse_crop", "print_verdict"]
+__all__ = ["DESCRIPTION", "add_arguments", "run", "parse_crop"]
+
+DESCRIPTION = ("Generate the core for the frame size, stream one frame through an HDL "
+               "simulator under cocotb (Verilator, Icarus) or through Amaranth's simulator, "
+               "and compare every output pixel with the golden model. Exit code 1 on any "
+               "mismatch.")
 
 
 def parse_crop(text, width, height):
@@ -52,10 +59,9 @@ def _frame(args):
 
 
 def _out_dir(value):
-    out = Path(value)
-    if out.exists() and not out.is_dir():
+    if Path(value).exists() and not Path(value).is_dir():
         raise UserError(f"--out {value} exists and is not a directory")
-    return out
+    return check_output_folder(value)
 
 
 def run(args):
@@ -91,23 +97,7 @@ def run(args):
     return 0 if comparison.ok else 1
 
 
-def print_verdict(comparison, cycles, pixels, clock_mhz=100.0):
-    """The co-simulation verdict: pixels compared, mismatches, cycles and frame rate."""
-    fps = clock_mhz * 1e6 / cycles if cycles > 0 else 0.0
-    verdict = "bit-exact" if comparison.ok else comparison.message()
-    print(f"pixels compared:  {comparison.pixels}")
-    print(f"mismatches:       {comparison.mismatches} ({verdict})")
-    print(f"cycles per frame: {cycles} ({cycles / pixels:.2f} per pixel)")
-    print(f"frame rate:       {fps:.1f} frames/s at {clock_mhz:g} MHz")
-
-
-def add_parser(subparsers):
-    parser = subparsers.add_parser(
-        "cosim", help="co-simulate the generated core on one frame, bit for bit",
-        description="Generate the core for the frame size, stream one frame through an HDL "
-                    "simulator under cocotb (Verilator, Icarus) or through Amaranth's simulator, "
-                    "and compare every output pixel with the golden model. Exit code 1 on any "
-                    "mismatch.")
+def add_arguments(parser):
     parser.add_argument("--simulator", required=True, choices=SIMULATORS,
                         help="verilator (fast), icarus, or amaranth (slow: small crops only)")
     source = parser.add_mutually_exclusive_group(required=True)

@@ -1,0 +1,7 @@
+"""``python -m npstereo.gen.cli``: the ``npstereo`` command."""
+
+import sys
+
+from .main import main
+
+sys.exit(main())

