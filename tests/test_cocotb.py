@@ -5,7 +5,8 @@ Every output pixel is compared with the golden model inside the cocotb test (see
 Builds are cached per configuration under ``build/cosim/<hash>/`` and shared by the tests
 of one configuration, so each Verilator model is compiled once (without C++ optimisation:
 the frames are tiny). Frames are 40 x 12; a core generated with a broken transform
-comparison must be reported as mismatching on both simulators.
+comparison must be reported as mismatching on both simulators, and a Verilog top level that
+swaps the pixels of ``s_axis_tdata`` on Icarus.
 """
 
 import numpy as np
@@ -13,7 +14,7 @@ import pytest
 
 from npstereo.gen.cli.main import main
 from npstereo.hdl import transform as hdl_transform
-from npstereo.hdl import trees
+from npstereo.hdl import trees, verilog
 from npstereo.params import StereoParams
 from npstereo.sim import cosim
 from npstereo.sim.frames import compare_frame
@@ -103,6 +104,24 @@ def test_broken_core_fails(simulator, monkeypatch):
     x, y, expected, got = comparison.first
     assert expected != got
     assert f"first at x={x} y={y}" in result.message()
+
+
+def test_broken_axi_mapping_fails(monkeypatch):
+    """A Verilog top level that takes the left pixel from the upper byte of
+    ``s_axis_tdata`` must be caught: the AXI4-Stream ports are checked, not only the core."""
+    original = verilog.AxiTop.elaborate
+
+    def swapped(self, platform):
+        m = original(self, platform)
+        pixels = self.core.sink.payload.data
+        m.d.comb += [pixels.left.eq(self.s_axis_tdata[8:]),
+                     pixels.right.eq(self.s_axis_tdata[:8])]
+        return m
+
+    monkeypatch.setattr(verilog.AxiTop, "elaborate", swapped)
+    params, _ = CONFIGS["ext-rank-3-D4-R1-nolr"]
+    result = cosim.run_stream("icarus", params, frames(params), TRAFFIC_PLAN)
+    assert not result.ok and result.mismatches > 0
 
 
 def test_compare_reports_first_pixel_and_count():
