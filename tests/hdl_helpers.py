@@ -22,7 +22,7 @@ from npstereo.hdl.core import NpStereoCore
 from npstereo.sim.frames import decode_map
 
 __all__ = ["frame_beats", "run_scenario", "decode_frames", "first_mismatch", "check_frames",
-           "RESET", "refused_quietly"]
+           "RESET", "refused_quietly", "simulate"]
 
 #: A marker in the beat list: assert ``rst`` for one clock at this point of the input.
 RESET = "reset"
@@ -119,11 +119,16 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
                 break
         state["cycles"] = last_word_cycle + 1
 
+    simulate(top, bench)
+    return {"words": words, "frame_starts": starts, "latency": dut.latency, **state}
+
+
+def simulate(top, bench):
+    """Run the testbench coroutine ``bench`` on ``top`` with a 100 MHz ``sync`` clock."""
     sim = Simulator(top)
     sim.add_clock(1e-8)
     sim.add_testbench(bench)
     sim.run()
-    return {"words": words, "frame_starts": starts, "latency": dut.latency, **state}
 
 
 def check_frames(params, pairs, beats, **kwargs):

@@ -14,11 +14,10 @@ import pytest
 from amaranth.hdl import Module, Signal
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
-from amaranth.sim import Simulator
 
 from npstereo.hdl.stream_parts import InputQueue, RegisterSlice
 
-from hdl_helpers import refused_quietly
+from hdl_helpers import refused_quietly, simulate
 
 #: An 18-bit payload in three lanes, as the core's pixel beats.
 WIDTH, LANES, DEPTH = 18, [(0, 8), (8, 16), (16, 18)], 4
@@ -78,10 +77,7 @@ def run(dut, beats, *, ready_waits_for_valid, idle=0.0, backpressure=0.0, seed=0
                     break
             await ctx.tick()
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     return result
 
 
