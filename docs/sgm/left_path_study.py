@@ -1,0 +1,197 @@
+"""Issue 27's first question: which left-path recurrence can close at one position per clock?
+
+Usage: ``python docs/sgm/left_path_study.py --dataset DIR --out docs/sgm/left_path_study.json``
+(DIR: the Middlebury 2003 teddy folder, with disp6.pgm for the mirrored view), then
+``--report`` to print the table of an existing ``--out``.
+
+The left path's loop is the only one of the four that closes within a row: L(x, .) needs
+m(x - 1) = min_d L(x - 1, d), a minimum over all D values of the position just before.
+Each variant below keeps the unnormalised path cost Lu of one row exact in integers,
+
+    Lu(x, d) = C(x, d) + min(Lu(x - s, d), Lu(x - s, d +- 1) + P1, ref(x) + P2(x)),
+
+with Lu = C for the first s columns, and differs only in the step s and in ref(x), the
+reference the large step is taken from (exact SGM: s = 1, ref(x) = min_d Lu(x - 1, d)):
+
+- ``exact``: ref(x) = min_d Lu(x - s, d) (s = 1 is golden/sgm.py bit for bit, checked);
+- ``stale K``: ref(x) = min_d Lu(x - K s, d), the minimum of an older position;
+- ``comp K``: the stale minimum plus the smallest costs Cmin of the positions in between, a
+  lower bound of the exact minimum;
+- ``track J K``: the path cost of the disparity d* that was best K steps back, carried
+  forward: ref(x) = Lu(x - J s, d*) + sum of C(i, d*) over the J - 1 positions i in
+  between, with d* = argmin_d Lu(x - K s, d) (ties to the lowest d). An upper bound of the
+  exact minimum (Lu(i, d) <= C(i, d) + Lu(i - s, d)), exact while the best disparity
+  stays. In hardware it is a multiplexer of J registered steps and an argmin K steps
+  old: no minimum over D inside the loop.
+
+The output normalisation is exact SGM's, L(x, d) = Lu(x, d) - min_d Lu(x - s, d) (0 for the
+first s columns), computed outside the loop. The three paths from the row above are
+golden/sgm.py's. Scored with the project's metric, L/R check at 3, on teddy, teddy
+mirrored and the synthetic scenes (seeds 0-2) at noise 0, 2e-4 and 2e-3.
+"""
+
+import argparse
+import itertools
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from npstereo.golden import sgm
+from npstereo.golden.data import load_middlebury, read_image
+from npstereo.golden.degrade import gaussian_noise_pair
+from npstereo.golden.quality import evaluate
+from npstereo.golden.synthetic import synthetic_pair
+from npstereo.params import SGM_ROW_PATHS, StereoParams
+
+#: (name, step s, kind, J, K) of every variant measured.
+VARIANTS = [("exact", 1, "exact", 0, 0),
+            ("stale 8", 1, "stale", 0, 8), ("stale 12", 1, "stale", 0, 12),
+            ("comp 2", 1, "comp", 0, 2), ("comp 4", 1, "comp", 0, 4),
+            ("comp 8", 1, "comp", 0, 8),
+            ("track 1 4", 1, "track", 1, 4), ("track 2 8", 1, "track", 2, 8),
+            ("track 3 12", 1, "track", 3, 12), ("track 4 16", 1, "track", 4, 16),
+            ("step 2, exact", 2, "exact", 0, 0), ("step 2, track 2 6", 2, "track", 2, 6),
+            ("step 3, exact", 3, "exact", 0, 0)]
+#: (transform, block, P1, P2, adaptive-P2 exponent): the default and census 5x5's best.
+CONFIGS = [("census", 7, 24, 79, 5), ("census", 5, 16, 96, 4)]
+NOISE = (0.0, 2e-4, 2e-3)
+SEEDS = (0, 1, 2)
+
+
+def left_path(volume, p1, p2_map, step, kind, j, k):
+    """(L of the left path (H, W, D) int64, largest Lu(x, d) - min_d Lu(x, d))."""
+    costs = volume.astype(np.int64).transpose(1, 0, 2)          # (W, H, D)
+    width, height, _ = costs.shape
+    p2 = p2_map.T.astype(np.int64)
+    path = np.empty_like(costs)
+    path[:step] = costs[:step]
+    minima = path.min(axis=2)                                   # filled as x advances
+    best = path.argmin(axis=2)
+    cmin = costs.min(axis=2)
+    rows = np.arange(height)
+    spread = 0
+    for x in range(step, width):
+        previous = path[x - step]
+        candidates = previous.copy()
+        candidates[:, 1:] = np.minimum(candidates[:, 1:], previous[:, :-1] + p1)
+        candidates[:, :-1] = np.minimum(candidates[:, :-1], previous[:, 1:] + p1)
+        first = x % step                                        # this step's first column
+        if kind == "exact":
+            ref = minima[x - step]
+        elif kind in ("stale", "comp"):
+            older = x - k * step
+            ref = minima[max(older, first)]
+            if kind == "comp" or older < first:
+                ref = ref + sum(cmin[i] for i in range(max(older, first) + step, x, step))
+        else:
+            chosen = best[max(x - k * step, first)]
+            since = max(x - j * step, first)
+            ref = path[since, rows, chosen] + sum(costs[i, rows, chosen]
+                                                  for i in range(since + step, x, step))
+        path[x] = costs[x] + np.minimum(candidates, (ref + p2[x])[:, None])
+        minima[x], best[x] = path[x].min(axis=1), path[x].argmin(axis=1)
+        spread = max(spread, int((path[x].max(axis=1) - minima[x]).max()))
+    normalised = path.copy()
+    normalised[step:] -= minima[:-step, :, None]
+    return normalised.transpose(1, 0, 2), spread
+
+
+def score(left, right, truth, disparities, config, variant):
+    transform, block, p1, p2, adapt = config
+    _, step, kind, j, k = variant
+    params = StereoParams(transform=transform, block=block, disparities=disparities)
+    volume = sgm.cost_volume(left, right, params)
+    rows = sum(sgm.path_costs(volume, path, p1, p2, guide=left, adapt=adapt,
+                              max_cost=params.max_cost).astype(np.int64)
+               for path in SGM_ROW_PATHS)
+    left_costs, spread = left_path(volume, p1, sgm.path_p2(left, "left", p1, p2, adapt),
+                                   step, kind, j, k)
+    summed = rows + left_costs
+    if (step, kind) == (1, "exact"):
+        golden = sgm.aggregate(volume, p1, p2, guide=left, adapt=adapt,
+                               max_cost=params.max_cost)
+        assert np.array_equal(summed, golden), "the exact variant must be golden/sgm.py"
+    disparity = sgm.disparity_from_summed(summed, 3).disparity
+    return round(evaluate(disparity, truth, disparities).correct, 3), spread
+
+
+def conditions(dataset):
+    pair = load_middlebury(dataset)
+    left, right = pair.gray()
+    yield "teddy", left, right, pair.ground_truth, 100
+    truth = read_image(Path(dataset) / "disp6.pgm", "ground truth").astype(np.float64)
+    yield ("teddy mirrored", np.ascontiguousarray(right[:, ::-1]),
+           np.ascontiguousarray(left[:, ::-1]),
+           np.ascontiguousarray(np.where(truth == 0, np.nan, truth / 4)[:, ::-1]), 100)
+    for noise, seed in itertools.product(NOISE, SEEDS):
+        scene = synthetic_pair(256, 192, 48, seed=seed)
+        sl, sr = scene.gray()
+        if noise:
+            sl, sr = gaussian_noise_pair(sl, sr, noise, seed=seed)
+        yield f"synthetic noise {noise:g} s{seed}", sl, sr, scene.ground_truth, 48
+
+
+def report(rows):
+    """Markdown: per configuration and variant, the change from exact SGM per condition
+    (the synthetic seeds pooled by noise level) and the largest shortfall."""
+    def condition(scene):
+        return scene.rsplit(" ", 1)[0] if scene.startswith("synthetic") else scene
+    names = list(dict.fromkeys(condition(r["scene"]) for r in rows))
+    lines = []
+    for config in dict.fromkeys(r["config"] for r in rows):
+        table = {}
+        for r in (r for r in rows if r["config"] == config):
+            table.setdefault(r["variant"], {}).setdefault(condition(r["scene"]), []).append(
+                (r["correct"], r["spread"]))
+        exact = {c: np.mean([v for v, _ in vs]) for c, vs in table["exact"].items()}
+        lines += [f"#### {config}", "", "| left path | " + " | ".join(names)
+                  + " | largest shortfall | largest spread |",
+                  "|---|" + "---:|" * (len(names) + 2)]
+        for variant, by_condition in table.items():
+            means = {c: np.mean([v for v, _ in vs]) for c, vs in by_condition.items()}
+            change = {c: means[c] - exact[c] for c in means}
+            spread = max(s for vs in by_condition.values() for _, s in vs)
+            cells = [f"{means[c]:.2f}" if variant == "exact" else
+                     f"{means[c]:.2f} ({change[c]:+.2f})" for c in names]
+            shortfall = max(0.0, -min(change.values()))
+            lines.append(f"| {variant} | " + " | ".join(cells) + f" | {shortfall:.2f} | "
+                         f"{spread} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dataset", type=Path)
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--report", action="store_true",
+                        help="print the table of an existing --out instead of measuring")
+    args = parser.parse_args(argv)
+    if args.report:
+        print(report(json.loads(args.out.read_text())["rows"]))
+        return 0
+    if args.dataset is None:
+        parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
+    rows = []
+    for config in CONFIGS:
+        label = f"{config[0]} {config[1]}x{config[1]}, P1 = {config[2]}, P2 = {config[3]}, " \
+                f"t = {config[4]}"
+        for scene, left, right, truth, disparities in conditions(args.dataset):
+            for variant in VARIANTS:
+                correct, spread = score(left, right, truth, disparities, config, variant)
+                rows.append(dict(config=label, scene=scene, variant=variant[0],
+                                 correct=correct, spread=spread))
+                print(f"{label} | {scene:26s} | {variant[0]:18s} {correct:6.2f} "
+                      f"spread {spread}", flush=True)
+        # Written after every configuration: an interrupted run keeps what it measured.
+        tmp = args.out.with_suffix(".tmp")
+        tmp.write_text(json.dumps({"rows": rows}, indent=0) + "\n")
+        tmp.replace(args.out)
+    print(report(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
