@@ -132,6 +132,8 @@ class NpStereoCore(wiring.Component):
         lanes.append((beat["first"].offset, beat["last"].offset + 1))
         m.submodules.in_queue = in_queue = InputQueue(beat, INPUT_QUEUE, lanes)
         wiring.connect(m, wiring.flipped(self.sink), in_queue.sink)
+        # The decision pops only a head it saw valid, as the queue requires (a pop only
+        # happens in round R-1, so a head seen valid earlier in the slot still is).
         pop = in_queue.source.ready
         head, head_valid = in_queue.source.payload, in_queue.source.valid
         # The head is registered on its way to the admission and the position's register
@@ -152,8 +154,8 @@ class NpStereoCore(wiring.Component):
         m.submodules.out_queue = queue = SyncFIFOBuffered(
             width=len(word.as_value()), depth=self.queue_depth)
         # The port is driven by a register slice (an output register and a skid register):
-        # the sink's ready reaches the output register's enable and nothing else, and that
-        # enable is one LUT from the pin and valid (a shifting queue's pop logic was three
+        # the consumer's ready reaches the output register's enable and nothing else, and
+        # that enable is one LUT from the pin and valid (a shifting queue's pop logic was three
         # LUTs and 8.8 ns from m_axis_tvalid to m_axis_tdata, ext. rank 7x7 on ECP5).
         m.submodules.out_port = out_port = RegisterSlice(word.shape())
         wiring.connect(m, queue.r_stream, out_port.sink)

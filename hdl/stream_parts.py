@@ -5,7 +5,7 @@ payload shape, and are arranged for timing at the pins of an FPGA rather than fo
 registers: the reasons, measured on the core, are in the comments.
 """
 
-from amaranth.hdl import Const, Module, Mux, Signal, Value
+from amaranth.hdl import Const, Module, Mux, Shape, Signal, Value
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -23,8 +23,8 @@ class InputQueue(wiring.Component):
     depth : int
         Entries, a power of two >= 4 (the pointers wrap by themselves).
     lanes : list of (int, int)
-        Bit ranges of the payload that go different ways in the consumer; each has pointers
-        and write enables of its own.
+        Bit ranges ``[low, high)`` of the payload that go different ways in the consumer,
+        covering every bit once; each has pointers and write enables of its own.
 
     Members
     -------
@@ -45,6 +45,9 @@ class InputQueue(wiring.Component):
         # of a queue really left unused at the caller's line.
         if depth < 4 or depth & (depth - 1):
             raise ValueError(f"depth must be a power of two >= 4, not {depth}")
+        bits = sorted(bit for low, high in lanes for bit in range(low, high))
+        if bits != list(range(Shape.cast(shape).width)):
+            raise ValueError(f"lanes {lanes} must cover every bit of the payload once")
         return super().__new__(cls, src_loc_at=1)
 
     def __init__(self, shape, depth, lanes):

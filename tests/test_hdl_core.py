@@ -15,7 +15,8 @@ import pytest
 from amaranth.hdl import Value
 from amaranth.lib import memory
 
-from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan, trees
+from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan, plan_structure
+from npstereo.hdl import trees
 from npstereo.hdl import core as core_module
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
@@ -86,7 +87,7 @@ def test_cost_bank_choice_in_levels(monkeypatch):
     """A cost line buffer of 20 banks (banks of 2 words, W*R = 40): the bank is chosen in
     three registered levels, and the core's timing takes the two clocks more, across two
     frames back to back with stalls."""
-    monkeypatch.setattr(plan, "COST_BANK", 2)
+    monkeypatch.setattr(plan_structure, "COST_BANK", 2)
     params = StereoParams(transform="ext-census", block=3, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7, line_buffer="costs")
     assert plan.bank_choice_levels(params) == 3
@@ -113,7 +114,7 @@ def test_large_window_control(monkeypatch, transform, rounds):
 def test_spaced_popcount(monkeypatch):
     """The census cost's popcount with a register every second adder level (what census
     does from 17x17 on), at block 5: same frames, back to back, with stalls."""
-    monkeypatch.setattr(plan, "SPACED_POPCOUNT_ABOVE", 8)
+    monkeypatch.setattr(plan_structure, "SPACED_POPCOUNT_ABOVE", 8)
     params = StereoParams(transform="census", block=5, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7)
     assert not all(plan.cost_plan(params))
@@ -135,7 +136,7 @@ def test_popcount_spacing_by_block():
 def test_spaced_sum_of_differences(monkeypatch):
     """Ext. census's sum of absolute differences with its first register one adder level
     later (what ext. census does from 13x13 on), at block 3: same frames with stalls."""
-    monkeypatch.setattr(plan, "SPACED_SAD_ABOVE", 4)
+    monkeypatch.setattr(plan_structure, "SPACED_SAD_ABOVE", 4)
     params = StereoParams(transform="ext-census", block=3, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7)
     assert plan.cost_plan(params)[:3] == [False, False, True]
@@ -375,8 +376,8 @@ def test_broken_lr_threshold_is_caught(monkeypatch):
 def test_broken_window_row_mask_is_caught(monkeypatch):
     """Window rows outside the frame left unmasked: the rows an aborted frame left in the
     line buffers leak into the top rows."""
-    monkeypatch.setattr(input_stage, "_row_inside", lambda y, offset, height: 1)
-    monkeypatch.setattr(input_stage, "_row_inside_at", lambda y, offset, height: 1)
+    monkeypatch.setattr(input_stage, "_offset_row_inside", lambda y, offset, height: 1)
+    monkeypatch.setattr(input_stage, "_offset_row_inside_at", lambda y, offset, height: 1)
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 

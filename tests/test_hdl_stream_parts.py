@@ -137,10 +137,13 @@ def test_holds_its_capacity_while_stalled(part, capacity):
     check_capacity(*PARTS[part], capacity)
 
 
-def test_queue_depth_must_be_a_power_of_two():
+def test_queue_parameters_are_checked():
     for depth in (2, 6):
         refused_quietly(lambda: InputQueue(WIDTH, depth, LANES), ValueError,
                         "power of two >= 4")
+    for lanes in ([(0, 8), (8, 16)], [(0, 10), (8, 18)]):
+        refused_quietly(lambda: InputQueue(WIDTH, DEPTH, lanes), ValueError,
+                        "cover every bit of the payload once")
 
 
 # Deliberately wrong components must fail the checks above -----------------------------
