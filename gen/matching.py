@@ -75,8 +75,7 @@ def _cost(params):
     SGM's four paths cost about as much as a 15 x 15 census transform (teddy: 1.1 s for
     census 7x7 SGM against 0.4 s for the census 9x9 box).
     """
-    weight = {"rank": 1, "ext-rank": 1, "census": 1, "ext-census": 4}[params.transform]
-    return weight * params.block * params.block + (225 if params.is_sgm else 0)
+    return params.spec.golden_weight * params.block * params.block + (225 if params.is_sgm else 0)
 
 
 def run_jobs(jobs, jobs_n=1, desc="matching"):

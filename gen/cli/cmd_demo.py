@@ -11,11 +11,10 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ...golden import sgm
 from ...golden.quality import evaluate
 from ...golden.synthetic import DEFAULT_DISPARITIES, synthetic_pair
 from ...hdl.verilog import core_verilog
-from ...params import TRANSFORMS, StereoParams
+from ...params import SGM_RECOMMENDED, TRANSFORMS, StereoParams
 from ...sim.cosim import run_frame
 from ..atomic import write_text
 from ..images import save_disparity_png, save_gray_png
@@ -37,10 +36,10 @@ SGM_NAME = "sgm"
 
 def demo_configurations(block):
     """``(name, params)`` of the demo's maps: every transform with the 3x3 box at
-    ``block``, then the SGM default (census 7x7, ``golden.sgm.RECOMMENDED[0]``)."""
+    ``block``, then the SGM default (census 7x7, ``params.SGM_RECOMMENDED[0]``)."""
     box = [(t, StereoParams(transform=t, block=block, disparities=DEFAULT_DISPARITIES))
            for t in TRANSFORMS]
-    return box + [(SGM_NAME, StereoParams(**sgm.RECOMMENDED[0],
+    return box + [(SGM_NAME, StereoParams(**SGM_RECOMMENDED[0],
                                           disparities=DEFAULT_DISPARITIES))]
 
 

@@ -4,7 +4,7 @@ Runs every transform at every block size on the clean scene (Fig. 6), with gauss
 of variance 0.002 (Fig. 8) and with the bayer stand-in in place of the paper's bayer-camera
 scenes (Figs. 10-11), and writes a markdown report with the paper's teddy numbers side by
 side, PNG plots, Fig. 12-style disparity images and all numbers as JSON. Beyond the paper,
-the recommended semi-global configurations (``golden.sgm.RECOMMENDED``) are measured under
+the recommended semi-global configurations (``params.SGM_RECOMMENDED``) are measured under
 the same conditions and shown beside each figure's table and in the Fig. 12 grid.
 """
 
@@ -13,11 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ...golden import sgm
 from ...golden.data import load_middlebury
 from ...golden.quality import evaluate
 from ...golden.synthetic import synthetic_pair
-from ...params import SGM, TRANSFORMS, StereoParams, UserError
+from ...params import SGM, SGM_RECOMMENDED, TRANSFORMS, StereoParams, UserError
 from ..atomic import write_text
 from ..images import save_disparity_png
 from ..matching import Condition, condition_images, run_jobs
@@ -55,8 +54,8 @@ def _mad(measured, reference):
 
 def sgm_configurations(disparities):
     """The semi-global configurations measured beside the paper's box: the defaults
-    (census 7x7) and census 5x5 with its own penalties (``golden.sgm.RECOMMENDED``)."""
-    return [StereoParams(**fields, disparities=disparities) for fields in sgm.RECOMMENDED]
+    (census 7x7) and census 5x5 with its own penalties (``params.SGM_RECOMMENDED``)."""
+    return [StereoParams(**fields, disparities=disparities) for fields in SGM_RECOMMENDED]
 
 
 def _sgm_label(params, semi_global):

@@ -9,7 +9,7 @@ clock the paper states, with the configurations ``npstereo report --paper`` runs
 
 import dataclasses
 
-from ...params import TRANSFORMS, StereoParams
+from ...params import TRANSFORM_SPECS, TRANSFORMS, StereoParams
 
 __all__ = ["PAPER_BLOCKS", "PAPER_FIG6", "PAPER_FIG8", "PAPER_NOISE", "PAPER_LOGIC",
            "PAPER_DID_NOT_FIT", "PAPER_MEMORY", "PAPER_CLOCK", "PAPER_SIZE",
@@ -61,7 +61,7 @@ PAPER_DISPARITIES, PAPER_ROUNDS = 100, 10
 
 #: Transforms with sums of absolute differences (the ext. rank transform, the ext. census
 #: cost), whose arithmetic ``lut_inputs`` arranges: the sweep has them for both LUT sizes.
-SAD_TRANSFORMS = ("ext-rank", "ext-census")
+SAD_TRANSFORMS = tuple(name for name, spec in TRANSFORM_SPECS.items() if spec.sums_differences)
 
 
 def paper_configurations(line_buffers=("transforms", "costs", "pixels")):
