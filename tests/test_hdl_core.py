@@ -16,7 +16,7 @@ from amaranth.hdl import Value
 from amaranth.lib import memory
 
 from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan, plan_structure
-from npstereo.hdl import trees
+from npstereo.hdl import trees, window_centre
 from npstereo.hdl import core as core_module
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
@@ -376,16 +376,16 @@ def test_broken_lr_threshold_is_caught(monkeypatch):
 def test_broken_window_row_mask_is_caught(monkeypatch):
     """Window rows outside the frame left unmasked: the rows an aborted frame left in the
     line buffers leak into the top rows."""
-    monkeypatch.setattr(input_stage, "_offset_row_inside", lambda y, offset, height: 1)
-    monkeypatch.setattr(input_stage, "_offset_row_inside_at", lambda y, offset, height: 1)
+    monkeypatch.setattr(window_centre, "_offset_row_inside", lambda y, offset, height: 1)
+    monkeypatch.setattr(window_centre, "_offset_row_inside_at", lambda y, offset, height: 1)
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 
 
 def test_broken_window_column_mask_is_caught(monkeypatch):
     """Window columns outside the frame left unmasked: the previous row's end leaks in."""
-    monkeypatch.setattr(input_stage, "column_inside", lambda x, offset, width: 1)
-    monkeypatch.setattr(input_stage, "_column_inside_at", lambda x, offset, width: 1)
+    monkeypatch.setattr(window_centre, "column_inside", lambda x, offset, width: 1)
+    monkeypatch.setattr(window_centre, "_column_inside_at", lambda x, offset, width: 1)
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 
