@@ -4,7 +4,8 @@ An aggregation choice beside the A x A box of :mod:`.aggregation`: the matching 
 any transform are aggregated along the paths a raster-order stream can compute
 (``params.SGM_PATHS``: left, top-left, top, top-right) with integer penalties P1, P2
 (optionally P2 adapted to the intensity step along the path), normalised by the previous
-pixel's minimum, and summed. The summed costs S then go through the same WTA and
+pixel's minimum, and summed; the left path takes its large step from the tracked reference
+of the disparity best K positions back (``params.SGM_TRACK_AGE``, ``SGM_TRACK_STEPS``). The summed costs S then go through the same WTA and
 right-referenced map as the box pipeline. docs/semantics.md ("Semi-global aggregation") is
 the exact contract; every function here computes it bit for bit with integer numpy
 arithmetic (no floats anywhere). The paths, the rules of the parameters (P1, P2, t), the
@@ -22,9 +23,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..params import (SGM_PATH_COUNT, SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED,
-                      SGM_ROW_PATHS, ParameterError, StereoParams, check_penalties,
-                      check_sgm_paths)
+from ..params import (SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED, SGM_ROW_PATHS,
+                      SGM_TRACK_AGE, SGM_TRACK_STEPS, ParameterError, StereoParams,
+                      check_penalties, check_sgm_paths)
 from .data import check_gray_pair
 from .lr_check import INVALID, DisparityResult, lr_check
 from .matching_cost import cost_dtype, matching_costs, pixel_sums
@@ -42,13 +43,20 @@ RECOMMENDED = SGM_RECOMMENDED
 _BAND_ELEMENTS = 1 << 22
 
 
-def _dtype(max_cost, p2, n_paths):
+def _dtype(max_cost, p2):
     """The narrowest unsigned dtype holding every intermediate and S with room to spare.
 
     Room to spare: the right-referenced map pads with the dtype's maximum, which must be
-    larger than every real S.
+    larger than every real S. S <= (K Cmax + P2) + 3 (Cmax + P2) (docs/semantics.md,
+    "Widths"); the unnormalised left path has a dtype of its own (:func:`_left_band`).
     """
-    largest = max(max_cost + 2 * p2, n_paths * (max_cost + p2)) + 1
+    largest = max(max_cost + 2 * p2,
+                  SGM_TRACK_AGE * max_cost + p2 + len(SGM_ROW_PATHS) * (max_cost + p2)) + 1
+    return _fitting(largest)
+
+
+def _fitting(largest):
+    """The narrowest unsigned dtype that holds ``largest``."""
     for dtype in (np.uint16, np.uint32, np.uint64):
         if largest <= np.iinfo(dtype).max:
             return dtype
@@ -191,7 +199,7 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
     if guide is not None and np.shape(guide) != (height, width):
         raise ParameterError(f"guide image must be {width}x{height}, not of shape "
                              f"{np.shape(guide)}")
-    dtype = _dtype(max_cost, p2, SGM_PATH_COUNT)
+    dtype = _dtype(max_cost, p2)
     costs = volume.astype(dtype, copy=False)
     p1 = dtype(p1)
     p2_map = path_p2(guide if guide is not None else np.zeros((height, width), np.uint8),
@@ -207,19 +215,59 @@ def path_costs(volume, path, p1, p2, guide=None, adapt=None, max_cost=None):
 def _left_band(costs, p1, p2_map, out):
     """The left path over a band of rows (each row is independent): writes ``out``.
 
-    The recurrence runs along x, every row of the band at once; column-major copies make
-    each step's (rows, D) slices contiguous.
+    docs/semantics.md, "The left path": the unnormalised path cost Lu in exact integers,
+
+        Lu(x, d) = C(x, d) + min(Lu(x-1, d), Lu(x-1, d +- 1) + P1, ref(x) + P2(x)),
+
+    ref(x) from :func:`_tracked_reference`, and L(x, d) = Lu(x, d) - min_d Lu(x-1, d)
+    (L = Lu = C at x = 0). The recurrence runs along x, every row of the band at once;
+    column-major copies make each step's (rows, D) slices contiguous.
     """
-    width = costs.shape[1]
-    costs_t = np.ascontiguousarray(costs.transpose(1, 0, 2))
-    p2_t = np.ascontiguousarray(p2_map.T)[:, :, None]
-    out_t = np.empty_like(costs_t)
-    out_t[0] = costs_t[0]  # x = 0: fresh start
+    width, disparities = costs.shape[1], costs.shape[2]
+    # Lu grows along the row: Lu(x, .) <= m(x-1) + K Cmax + P2 and m(x) <= m(x-1) + Cmax.
+    top = int(costs.max()) if costs.size else 0
+    wide = _fitting((width + SGM_TRACK_AGE + 1) * top + 2 * int(p2_map.max(initial=0))
+                    + int(p1))
+    costs_t = np.ascontiguousarray(costs.transpose(1, 0, 2), dtype=wide)
+    p2_t = np.ascontiguousarray(p2_map.T, dtype=wide)
+    p1 = wide(p1)
+    path = np.empty_like(costs_t)
+    path[0] = costs_t[0]  # x = 0: fresh start
+    index = np.arange(costs_t.shape[1])
+    best = np.empty(costs_t.shape[:2], np.intp)     # argmin_d Lu(x, d), ties to the lowest
+    minima = np.empty(costs_t.shape[:2], wide)      # min_d Lu(x, d)
+    best[0] = path[0].argmin(axis=1)
+    minima[0] = path[0, index, best[0]]
     scratch = np.empty_like(costs_t[0])
     for x in range(1, width):
-        _step(costs_t[x], out_t[x - 1], p1, p2_t[x], out_t[x], scratch)
-    out[...] = out_t.transpose(1, 0, 2)
+        previous = path[x - 1]
+        np.copyto(scratch, previous)
+        if disparities > 1:
+            np.minimum(scratch[:, 1:], previous[:, :-1] + p1, out=scratch[:, 1:])
+            np.minimum(scratch[:, :-1], previous[:, 1:] + p1, out=scratch[:, :-1])
+        reference = _tracked_reference(path, costs_t, best, x, index)
+        np.minimum(scratch, (reference + p2_t[x])[:, None], out=scratch)
+        np.add(costs_t[x], scratch, out=path[x])
+        best[x] = path[x].argmin(axis=1)
+        minima[x] = path[x, index, best[x]]
+    path[1:] -= minima[:-1, :, None]
+    out[...] = path.transpose(1, 0, 2)
     return out
+
+
+def _tracked_reference(path, costs, best, x, index):
+    """ref(x) of the left path for every row of a band: (rows,).
+
+    The path cost of b = argmin_d Lu(max(x - K, 0), d) at s = max(x - J, 0), carried to
+    x - 1 along disparity b: Lu(s, b) + sum over s < i < x of C(i, b). ``path`` holds Lu
+    and ``costs`` C as (W, rows, D), ``best`` the argmin of every column so far.
+    """
+    chosen = best[max(x - SGM_TRACK_AGE, 0)]
+    since = max(x - SGM_TRACK_STEPS, 0)
+    reference = path[since, index, chosen].copy()
+    for i in range(since + 1, x):
+        reference += costs[i, index, chosen]
+    return reference
 
 
 def _row_band(costs, dx, p1, p2_map, previous, out):
@@ -337,7 +385,7 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
     check_sgm_paths(paths)
     paths = tuple(paths)
     height, width = left.shape
-    dtype = _dtype(params.max_cost, p2, SGM_PATH_COUNT)
+    dtype = _dtype(params.max_cost, p2)
     left_t, right_t = _transforms(left, right, params, threads)
     p2_maps = {path: path_p2(left, path, p1, p2, adapt).astype(dtype) for path in paths}
     p1 = dtype(p1)

@@ -19,8 +19,7 @@ from ..params import ParameterError
 # import from the modules that define them.
 from .plan_memories import memories, memory_bits
 from .plan_structure import bank_choice_levels, cost_plan, masks_after_compare, output_width
-from .plan_timing import (SGM_LOOP_CLOCKS, core_timing, cycles_per_frame, latency,
-                          sgm_min_rounds, sgm_tree_clocks)
+from .plan_timing import core_timing, cycles_per_frame, latency
 
 __all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
            "latency", "cycles_per_frame", "core_timing", "memories", "memory_bits",
@@ -50,8 +49,7 @@ def check_buildable(params):
     The golden model runs any size; the hardware needs the frame size and stays within
     :data:`MAX_WIDTH`, :data:`MAX_BLOCK` and :data:`MAX_DISPARITIES`, checked before
     anything is built so that an oversized request fails at once instead of elaborating
-    for minutes. Semi-global aggregation also needs enough rounds for its left path's loop
-    (:func:`sgm_min_rounds`).
+    for minutes. Semi-global aggregation takes any number of rounds that divides D.
     """
     if params.width is None or params.height is None:
         raise ParameterError("the hardware needs the image size: give width and height "
@@ -65,21 +63,3 @@ def check_buildable(params):
     if params.disparities > MAX_DISPARITIES:
         raise ParameterError(f"disparities must be <= {MAX_DISPARITIES} for the hardware, "
                              f"not {params.disparities}")
-    if params.is_sgm:
-        _check_sgm_rounds(params)
-
-
-def _check_sgm_rounds(params):
-    """Refuse (one line) rounds too few for the left path's loop."""
-    tree = sgm_tree_clocks(params.per_round)
-    if params.rounds >= tree + SGM_LOOP_CLOCKS:
-        return
-    need = sgm_min_rounds(params.disparities)
-    if need is None:
-        raise ParameterError(
-            f"aggregation sgm needs rounds >= {SGM_LOOP_CLOCKS} (the left path's loop), so "
-            f"disparities >= {SGM_LOOP_CLOCKS}, not {params.disparities}")
-    raise ParameterError(
-        f"aggregation sgm needs rounds >= {need} for {params.disparities} disparities "
-        f"(the left path's loop takes {tree + SGM_LOOP_CLOCKS} clocks at "
-        f"{params.per_round} per round), not {params.rounds}")

@@ -78,13 +78,17 @@ def sgm_memories(params):
     Block RAM: the previous row's path costs, one word per (column, round) of D/R values,
     top and top-left in one memory (both read the position's own column), top-right in
     another (it reads the next column); the three paths' minima, one word per column.
-    LUT RAM: the left path's a(x, d) and the top-left words held for the next position,
-    one word per round each.
+    LUT RAM (R > 1; registers at R = 1): the left path's Lu(x - 1, .) (D/R values of
+    ``left_loop_bits`` per round) and the first of them again (the neighbour across the next
+    round's edge), and the top-left words held for the next position.
     """
     p = params
     word = p.per_round * p.path_cost_bits
-    return [MemoryUse("path rows (top, top-left)", 1, p.width * p.rounds, 2 * word),
-            MemoryUse("path rows (top-right)", 1, p.width * p.rounds, word),
-            MemoryUse("path minima", 1, p.width, 3 * p.path_cost_bits),
-            MemoryUse("left path store", 1, p.rounds, word),
-            MemoryUse("top-left store", 1, p.rounds, word)]
+    result = [MemoryUse("path rows (top, top-left)", 1, p.width * p.rounds, 2 * word),
+              MemoryUse("path rows (top-right)", 1, p.width * p.rounds, word),
+              MemoryUse("path minima", 1, p.width, 3 * p.path_cost_bits)]
+    if p.rounds > 1:
+        result += [MemoryUse("left path store", 1, p.rounds, p.per_round * p.left_loop_bits),
+                   MemoryUse("left path first lanes", 1, p.rounds, p.left_loop_bits),
+                   MemoryUse("top-left store", 1, p.rounds, word)]
+    return result

@@ -10,16 +10,16 @@ elaborated hardware.
 
 from dataclasses import dataclass
 
-from ..params import SGM_PATH_COUNT
+from ..params import SGM_PATH_COUNT, SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .plan_structure import (bank_choice_levels, cost_plan, cost_rows, horizontal_plan,
                              masks_after_compare, row_sum_plan, transform_plan, vertical_plan)
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
-           "CalculationTiming", "calculation_timing", "SGM_LOOP_CLOCKS", "sgm_tree_clocks",
-           "sgm_min_rounds", "SgmTiming", "sgm_timing", "evaluation_latency", "LR_STAGE_A",
-           "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
+           "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
+           "SGM_LEFT_LEAD", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "evaluation_latency",
+           "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
 
 
@@ -146,21 +146,8 @@ def calculation_timing(params, every=DEFAULT_EVERY):
 
 # Semi-global aggregation (hdl/sgm.py) -----------------------------------------------------
 
-#: Clocks of the left path's loop besides its minimum tree: the store's read register,
-#: C + a, the running minimum over the rounds, the minimum m, the materialised L, the next
-#: a, and its write into the store before the next position reads it. The loop closes in
-#: a slot of R clocks if R >= T + SGM_LOOP_CLOCKS (docs/hardware.md, "Semi-global
-#: aggregation").
-SGM_LOOP_CLOCKS = 6
-
-
 #: Clocks from the SGM stage's input to each path's P2: the intensity steps, then P2.
 SGM_GUIDE_CLOCKS = 2
-
-
-#: Where the left path reads a(x, d) of round 0 from its store (the address is a local
-#: round counter, a register).
-SGM_LEFT_READ = 1
 
 
 #: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the
@@ -170,23 +157,17 @@ SGM_LEFT_READ = 1
 SGM_ROW_CLOCKS = 10
 
 
+#: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
+#: its loop (hdl/sgm_left.py): b(x) of the history or of G(0) registered (<= 1 clock after),
+#: C(p, b) picked (two clocks), its file written, the sum of P2 and the picked costs, then
+#: ref + P2 (the clock before the loop).
+SGM_LEFT_LEAD = 5
+
+
 def sgm_tree_clocks(units):
     """Registers of a minimum over ``units`` values: one per level (a comparison and the
     multiplexer it drives fill a 150 MHz clock on ECP5)."""
     return tree_levels(units)
-
-
-def sgm_min_rounds(disparities):
-    """Fewest rounds R dividing D for which the left path's loop fits a slot, or None.
-
-    R >= T + :data:`SGM_LOOP_CLOCKS` with T = ceil(log2(D/R)); both sides move the same
-    way with R, so every larger divisor fits too.
-    """
-    for rounds in range(1, disparities + 1):
-        if disparities % rounds == 0 and \
-                rounds >= sgm_tree_clocks(disparities // rounds) + SGM_LOOP_CLOCKS:
-            return rounds
-    return None
 
 
 @dataclass(frozen=True)
@@ -197,8 +178,13 @@ class SgmTiming:
     """
     tree: int           #: T, registers of a minimum over the round's D/R values
     guide: int          #: P2 of every path (slot-aligned)
-    left_read: int      #: the left path reads a(x, d) from its store
-    materialise: int    #: the left path's L(x, d) is formed (m(x - 1) is there)
+    loop: int           #: the left path's loop reads Lu(x - 1, .) (ref + P2 is there)
+    left_stages: int    #: clocks of the loop's lane update (1 at R <= 2, else 2)
+    left_lu: int        #: Lu(x, .) in its register
+    left_argmin: int    #: m(x) and argmin Lu(x, .) complete
+    left_early: int     #: m(0) and argmin C(0, .) complete (from the costs)
+    left_hand: int      #: m(0) stored for the row's first J positions
+    left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
     minima: int         #: their minima m(x) are written (the last round's running minimum)
@@ -206,23 +192,42 @@ class SgmTiming:
 
 
 def sgm_timing(params, every=DEFAULT_EVERY):
-    """The SGM stage's offsets (see :mod:`.sgm`).
+    """The SGM stage's offsets (see :mod:`.sgm` and :mod:`.sgm_left`).
 
-    The left path reads a(x, d) at ``left_read``, registers C + a a clock later, and its
-    minimum over the round (T registers) and the running minimum over the rounds (one)
-    hold U(x) in the last round; m(x) follows a clock later, ``left_read + 3 + T + R``
-    clocks after the input, which is R clocks into the next position: that position forms
-    its L from m(x - 1) from ``left_read + 3 + T`` on (``materialise``). The paths from
-    above take :data:`SGM_ROW_CLOCKS`; the paths' L are summed by a tree
-    (registered as ``every`` says, and at its root).
+    The left path: the argmin over C(0, .) is complete at T + R (``left_early``); the loop
+    reads at ``loop`` = T + :data:`SGM_LEFT_LEAD` + 1 and has Lu(x, .) in a register
+    ``left_stages`` later; its argmin at T + R after that. Position p registers b(p + k) as
+    early as both G(p + k - K) (``left_argmin`` of a position (K - k) slots back) and G(0)
+    allow; the asserts below are the margins of docs/hardware.md ("Semi-global
+    aggregation"), which hold for every D <= 256 and R dividing D. L = Lu - m(x - 1)
+    leaves T + 2 clocks after Lu. The paths from above take :data:`SGM_ROW_CLOCKS`; the
+    paths' L are summed by a tree (registered as ``every`` says, and at its root).
     """
+    rounds, steps, age = params.rounds, SGM_TRACK_STEPS, SGM_TRACK_AGE
     tree = sgm_tree_clocks(params.per_round)
-    materialise = SGM_LEFT_READ + 3 + tree
-    left = materialise + 1
+    stages = 1 if rounds < 3 else 2
+    early = tree + rounds
+    loop = tree + SGM_LEFT_LEAD + 1
+    lu = loop + stages
+    argmin = lu + tree + rounds
+    hand = max(early + 1, loop - 1)
+    # b(p + k) registered once G(p + k - K) and G(0) are there; it holds for R clocks, as
+    # long as the first level of its multiplexer needs it: C(p, .) is delayed to it, and
+    # for k = J it is registered just before Lu(p, .).
+    picks = tuple(max(tree + 1, argmin + 1 - (age - k) * rounds) for k in range(1, steps))
+    picks += (lu - 1,)
+    for k, at in enumerate(picks, 1):
+        assert at >= max(tree + 1, argmin + 1 - (age - k) * rounds), (k, at)
+    for k, at in enumerate(picks[:-1], 1):
+        # C(x - k, b(x)) in its file before position x sums them at loop - 2.
+        assert at + rounds + 2 <= k * rounds + loop - 2, (k, at)
+    # Lu(x - J, b) in its file before position x reads it at loop - 1.
+    assert lu + rounds + 1 <= steps * rounds + loop - 1
+    left = lu + tree + 2
     rows = SGM_ROW_CLOCKS
     summed = max(left, rows) + sum(register_plan(SGM_PATH_COUNT, every, 0, True))
-    return SgmTiming(tree, SGM_GUIDE_CLOCKS, SGM_LEFT_READ, materialise, left, rows,
-                     rows + tree + params.rounds, summed)
+    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, picks,
+                     left, rows, rows + tree + rounds, summed)
 
 
 # Evaluation, L/R check, the whole core ----------------------------------------------------

@@ -23,24 +23,9 @@ column x + 1 and handed on by registers: top-right uses the word at once, top a 
 later, top-left two positions later. Then, per lane, L = C + min(Lq(d), Lq(d +- 1) + P1,
 m + P2) - m, in the normalised form C + min(min(Lq(d), Lq(d +- 1) + P1) - m, P2).
 
-**The left path: a loop of one position.** Its predecessor is the previous position, whose
-minimum m(x - 1) over all D disparities is complete only after its last round, while the
-next position's round 0 starts a clock later. The recurrence is therefore split (docs/
-hardware.md, "Semi-global aggregation"): with a(x, d) = min(L(x-1, d), L(x-1, d +- 1) +
-P1) >= m(x - 1),
-
-    L(x, d) = C(x, d) + min(a(x, d) - m(x-1), P2(x)),
-    m(x) = min(U(x) - m(x-1), Cmin(x) + P2(x)),  U(x) = min_d (C(x, d) + a(x, d)),
-
-where U and Cmin = min_d C need no m at all: they are accumulated over the rounds while
-m(x - 1) is still being formed, and m(x) follows from them with one subtraction and one
-comparison. a(x + 1, .) needs only L(x, .), so it is formed as soon as L(x, .) is (one round
-after the other, with m(x - 1) known from round 0 on) and waits in a store of R words (LUT
-RAM) for position x + 1. The loop -- a(x, .), C + a, its minimum U(x), m(x), L(x + 1, .),
-a(x + 2, .) -- closes within a slot if R >= T + 6, T the registers of a minimum over D/R
-values (:func:`npstereo.hdl.plan_timing.sgm_min_rounds`). Every step is at a fixed offset after
-its own position's slot, so the sums have a fixed latency whatever the gaps between
-positions.
+**The left path** (:mod:`.sgm_left`): its large step takes the tracked reference of
+docs/semantics.md ("The left path"), so its loop is a lane update of one or two clocks at
+any R, and its output is normalised by the exact m(x - 1) outside the loop.
 
 **Fresh starts and stale state.** A path whose predecessor is outside the image starts
 fresh, L = C, decided from the tag: the left path at x = 0, top-left at x = 0 or y = 0, top
@@ -50,7 +35,7 @@ never reaches a result of the frame; memories and stores are written only in slo
 carry a position.
 """
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
@@ -58,6 +43,7 @@ from amaranth.lib.wiring import In, Out
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .common import SlotClock, Store, absolute_difference, bits_for, tag_layout
 from .plan_timing import sgm_timing
+from .sgm_left import left_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
 
 __all__ = ["GUIDE", "guide_pixels", "SemiGlobalAggregation"]
@@ -113,28 +99,6 @@ def _normalised(best, minimum, bound, p2, fresh):
     return Mux(fresh, 0, Mux(best <= bound, best - minimum, p2))
 
 
-def _materialise(ca, e, cp, cpp, minimum, minimum_p1):
-    """The left path's L(x, d) and L(x, d) + P1 from the terms stored for d and m(x - 1).
-
-    L = C + min(a - m, P2): a - m <= P2 exactly when e = a - P2 <= m, and then L = C + a - m
-    (``ca`` - m), else C + P2 (``cp``); L + P1 likewise from ``minimum_p1`` = m - P1 and
-    ``cpp`` = C + P2 + P1. A fresh start stores e above every m and cp = C.
-    """
-    take = e <= minimum
-    return Mux(take, ca - minimum, cp), Mux(take, ca - minimum_p1, cpp)
-
-
-def _next_minimum(total, bound, previous, previous_p1, capped, capped_p1, fresh):
-    """The left path's m(x) and m(x) - P1.
-
-    m(x) = min(U - m(x-1), Cmin + P2) for U = ``total``: U - m(x-1) <= Cmin + P2 exactly
-    when U <= ``bound`` = Cmin + P2 + m(x-1) (formed a clock ahead, m(x - 1) being there
-    long before U). A fresh start has m(x) = Cmin (``capped`` holds Cmin there).
-    """
-    take = ~fresh & (total <= bound)
-    return Mux(take, total - previous, capped), Mux(take, total - previous_p1, capped_p1)
-
-
 def _taps(m, value, depth, name):
     """``value`` and free-running copies of it 1 .. ``depth`` clocks late (taps[k])."""
     taps = [value]
@@ -163,11 +127,11 @@ class SemiGlobalAggregation(wiring.Component):
     Parameters
     ----------
     params : StereoParams
-        With ``aggregation="sgm"``, width and height, and enough rounds
-        (:func:`npstereo.hdl.plan.check_buildable`).
+        With ``aggregation="sgm"``, width and height (any R that divides D;
+        :func:`npstereo.hdl.plan.check_buildable`).
     every : int
         Register spacing of the adder of the four paths (see :mod:`.trees`); everything
-        else is registered where the left path's loop and its timing analysis put it.
+        else is registered where :func:`~.plan_timing.sgm_timing` puts it.
 
     Attributes
     ----------
@@ -215,7 +179,8 @@ class SemiGlobalAggregation(wiring.Component):
         costs = Cat(*(self.costs[i] for i in range(units)))
         #: The round's costs C, k clocks late at index k.
         self._costs = [_lanes(word, units, p.cost_bits) for word in
-                       _taps(m, costs, max(t.rows, t.materialise) - 1, "sgm_cost")]
+                       _taps(m, costs, max(t.rows - 1, t.loop + t.left_stages - 1,
+                                           t.left_picks[-2] + 1), "sgm_cost")]
         # Fresh starts of the position, slot-aligned with P2 (two registers after the tag).
         fresh = {}
         for path in SGM_PATHS:
@@ -223,12 +188,12 @@ class SemiGlobalAggregation(wiring.Component):
             flag = _register(m, _fresh(path, self.tag.x, self.tag.y, p.width), 1, name)
             fresh[path] = _taps(m, flag, t.guide - 1, name)[-1]
         p2 = self._penalties(m)
-        left = self._left_path(m, fresh["left"], p2["left"])
+        left = left_path(self, m, fresh["left"], p2["left"])
         rows = self._row_paths(m, fresh, p2)
         # The four L of each lane meet where the later of the two kinds is.
         aligned = max(t.left, t.rows)
         left = _lanes(_taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
-                      units, bits)
+                      units, p.left_cost_bits)
         rows = {path: _lanes(_taps(m, Cat(*lanes), aligned - t.rows,
                                    f"sgm_{path.replace('-', '_')}_aligned")[-1], units, bits)
                 for path, lanes in rows.items()}
@@ -279,109 +244,6 @@ class SemiGlobalAggregation(wiring.Component):
         running = Signal(tree.shape(), name=name, reset_less=True)
         m.d.sync += running.eq(Mux(slots.first(at) | (tree < running), tree, running))
         return running
-
-    def _left_path(self, m, fresh, p2):
-        """L of the left path per lane, at ``timing.left`` (see the module docstring).
-
-        Offsets after the input, for round j: a(x, d) is read from the store at
-        ``left_read`` + j and registered; C + a a clock later, its minimum tree and the
-        running minimum give U(x) in the last round, and m(x) is formed in the clock
-        after. The terms of L (C + a, a - P2, C + P2, C + P2 + P1) are registered at
-        ``materialise`` + j, where L and L + P1 are formed from m(x - 1); a(x + 1, d) a
-        clock later, written into the store in the clock after that.
-        """
-        p, t, slots = self.params, self.timing, self._slots
-        units, rounds, tree = p.per_round, p.rounds, t.tree
-        bits, p1 = p.path_cost_bits, p.p1
-        plus_bits = (p.max_cost + p.p2 + p1).bit_length()           # L + P1
-        sum_bits = (2 * p.max_cost + p.p2).bit_length()             # C + a
-        bound_bits = (2 * (p.max_cost + p.p2)).bit_length()         # Cmin + P2 + m
-        e_shape = signed(bits + 2)
-        above = 1 << bits                     # e of a fresh start: above every m
-        ones = (1 << plus_bits) - 1           # a candidate that never wins a minimum
-        read, materialise = t.left_read, t.materialise
-        costs = self._costs
-
-        # The position's scalars, slot-aligned a clock after P2.
-        scalars = t.guide + 1
-        add_cp = _register(m, Mux(fresh, 0, p2), bits, "sgm_left_add_cp")
-        add_cpp = _register(m, Mux(fresh, p1, p2 + p1), plus_bits, "sgm_left_add_cpp")
-        sub_e = _register(m, Mux(fresh, -above, p2), e_shape, "sgm_left_sub_e")
-        add_k1 = _register(m, Mux(fresh, -p1, p2 - p1), signed(bits + 1), "sgm_left_add_k1")
-
-        # a(x, .) of round j, written by the previous position.
-        store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
-        a_read = _register(m, store.read(slots.round(read)), units * bits, "sgm_left_a")
-        a_taps = [_lanes(word, units, bits)
-                  for word in _taps(m, a_read, tree + 1, "sgm_left_a")]
-
-        # U(x) = min over d of C + a, Cmin(x) = min over d of C.
-        sums = [_register(m, c + a, sum_bits, f"sgm_left_ca{i}")
-                for i, (c, a) in enumerate(zip(costs[read + 1], a_taps[0]))]
-        total = self._running_min(m, sums, read + 2, "sgm_left_u")
-        cost_min = self._running_min(m, costs[0], 0, "sgm_left_cmin")
-        # Cmin + P2 (Cmin at a fresh start), and that minus P1, once Cmin is complete.
-        complete = tree + rounds
-        capped = Signal(bits, name="sgm_left_capped", reset_less=True)
-        capped_p1 = Signal(signed(bits + 1), name="sgm_left_capped_p1", reset_less=True)
-        add_k = self._aligned(add_cp, scalars, complete, "sgm_left_k")
-        add_k1 = self._aligned(add_k1, scalars, complete, "sgm_left_k1")
-        with m.If(slots.first(complete)):
-            m.d.sync += [capped.eq(cost_min + add_k), capped_p1.eq(cost_min + add_k1)]
-        # m(x) and m(x) - P1, formed in the clock after U(x) is complete: `materialise` in
-        # the next position's slot. What the next position forms with them meanwhile
-        # still sees m(x - 1).
-        done = read + 2 + tree + rounds
-        minimum = Signal(bits, name="sgm_left_m", reset_less=True)
-        minimum_p1 = Signal(signed(plus_bits + 1), name="sgm_left_m_p1", reset_less=True)
-        bound = Signal(bound_bits, name="sgm_left_bound", reset_less=True)
-        previous_p1 = Signal(plus_bits, name="sgm_left_previous_p1", reset_less=True)
-        with m.If(slots.first(done - 1)):
-            m.d.sync += [bound.eq(capped + minimum), previous_p1.eq(minimum + p1)]
-        new, new_p1 = _next_minimum(total, bound, minimum, previous_p1, capped, capped_p1,
-                                    self._aligned(fresh, t.guide, done, "sgm_left_fresh_m"))
-        with m.If(slots.first(done) & self._valid_at(done)):
-            m.d.sync += [minimum.eq(new[:bits]), minimum_p1.eq(new_p1)]
-
-        # The terms of L(x, d) for the lanes of round j and for the first lane of round
-        # j + 1 (a clock newer in the same streams), registered at `materialise`.
-        at = materialise - 1
-        last = slots.round(at) == rounds - 1
-        add_cp, add_cpp, sub_e = (self._aligned(value, scalars, at, f"sgm_left_{name}")
-                                  for value, name in ((add_cp, "cp"), (add_cpp, "cpp"),
-                                                      (sub_e, "e")))
-        terms = []
-        for i in range(units + 1):
-            upper = i == units
-            c = costs[at - 1][0] if upper else costs[at][i]
-            a = a_taps[at - read - 2][0] if upper else a_taps[at - read - 1][i]
-            e, cpp = a - sub_e, c + add_cpp
-            if upper:
-                # The last round has no next one: a candidate that never wins.
-                e, cpp = Mux(last, above, e), Mux(last, ones, cpp)
-            terms.append((
-                _register(m, c + a, sum_bits, f"sgm_left_term_ca{i}"),
-                _register(m, e, e_shape, f"sgm_left_term_e{i}"),
-                # The next round's first lane is a neighbour only: its L + P1 is used.
-                Const(0) if upper else _register(m, c + add_cp, bits, f"sgm_left_term_cp{i}"),
-                _register(m, cpp, plus_bits, f"sgm_left_term_cpp{i}")))
-
-        # L(x, d) and L(x, d) + P1 from m(x - 1).
-        values, plus = [], []
-        for i, (ca, e, cp, cpp) in enumerate(terms):
-            value, value_p1 = _materialise(ca, e, cp, cpp, minimum, minimum_p1)
-            if i < units:
-                values.append(_register(m, value[:bits], bits, f"sgm_left_l{i}"))
-            plus.append(_register(m, value_p1[:plus_bits], plus_bits, f"sgm_left_lp{i}"))
-        # L + P1 of the previous round's last lane, for round j's first (none in round 0).
-        before = _register(m, Mux(slots.round(materialise) == 0, ones, plus[units - 1]),
-                           plus_bits, "sgm_left_lp_before")
-        neighbours = [before, *plus]
-        following = [_register(m, _minimum3(value, neighbours[i], neighbours[i + 2])[:bits],
-                               bits, f"sgm_left_next_a{i}") for i, value in enumerate(values)]
-        store.write(slots.round(materialise + 2), Cat(*following),
-                    self._valid_at(materialise + 2))
-        return values
 
     def _row_paths(self, m, fresh, p2):
         """L of top-left, top and top-right per lane, at ``timing.rows``.

@@ -18,7 +18,8 @@ from dataclasses import dataclass, replace
 from .errors import ParameterError, UserError, is_int, is_integral
 from .sgm import (P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2,
                   SGM_MAX_ADAPT, SGM_PATH_COUNT, SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED,
-                  SGM_ROW_PATHS, check_penalties, check_sgm_paths, max_path_penalty,
+                  SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS, check_penalties,
+                  check_sgm_paths, max_path_penalty, sgm_left_cost_bits, sgm_left_loop_bits,
                   sgm_path_cost_bits, sgm_path_steps, sgm_summed_cost_bits)
 from .transforms import (REDUCTIONS, TRANSFORM_SPECS, TRANSFORMS, TransformSpec,
                          check_transform_table)
@@ -28,7 +29,9 @@ __all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
            "SGM_PATHS", "SGM_PATH_COUNT", "SGM_ROW_PATHS", "sgm_path_steps", "check_sgm_paths",
            "SGM_DEFAULT_P1", "SGM_DEFAULT_P2", "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT",
            "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
-           "max_path_penalty", "check_penalties", "sgm_path_cost_bits", "sgm_summed_cost_bits"]
+           "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
+           "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
+           "sgm_summed_cost_bits"]
 
 #: What the hardware keeps of the rows above for the vertical aggregation: the matching
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
@@ -251,7 +254,7 @@ class StereoParams:
         """Width of the aggregated cost S that the winner-takes-all compares.
 
         Box: bitlen(A^2 Cmax). SGM: the sum of the four path costs,
-        bitlen(4 (Cmax + P2)).
+        bitlen(K Cmax + P2 + 3 (Cmax + P2)) (:func:`~.sgm.sgm_summed_cost_bits`).
         """
         if self.is_sgm:
             return sgm_summed_cost_bits(self.max_cost, self.p2)
@@ -259,9 +262,22 @@ class StereoParams:
 
     @property
     def path_cost_bits(self):
-        """SGM: width of one path cost L_r(p, d) and of its minimum, bitlen(Cmax + P2);
-        ``None`` for a box."""
+        """SGM: width of one path cost L_r(p, d) of the paths from the row above and of its
+        minimum, bitlen(Cmax + P2); ``None`` for a box."""
         return sgm_path_cost_bits(self.max_cost, self.p2) if self.is_sgm else None
+
+    @property
+    def left_cost_bits(self):
+        """SGM: width of the left path's L(p, d), bitlen(K Cmax + P2); ``None`` for a box."""
+        return sgm_left_cost_bits(self.max_cost, self.p2) if self.is_sgm else None
+
+    @property
+    def left_loop_bits(self):
+        """SGM: width n of the hardware's left path cost kept modulo 2^n; ``None`` for a
+        box."""
+        if not self.is_sgm:
+            return None
+        return sgm_left_loop_bits(self.max_cost, self.p1, self.p2)
 
     @property
     def disparity_bits(self):

@@ -12,7 +12,8 @@ from .errors import ParameterError, is_integral
 __all__ = ["SGM", "sgm_path_steps", "SGM_PATH_STEPS", "SGM_PATHS", "SGM_PATH_COUNT",
            "SGM_ROW_PATHS", "check_sgm_paths", "SGM_DEFAULT_P1", "SGM_DEFAULT_P2",
            "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT", "P2_ADAPT_OFF", "SGM_RECOMMENDED",
-           "max_path_penalty", "check_penalties", "sgm_path_cost_bits",
+           "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
+           "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
            "sgm_summed_cost_bits"]
 
 #: The ``aggregation`` value that replaces the A x A box by semi-global aggregation along
@@ -58,6 +59,19 @@ def check_sgm_paths(paths):
         raise ParameterError(
             f"SGM paths must be distinct names among {', '.join(SGM_PATHS)}, not {paths!r}")
 
+
+#: The left path's reference of the large step (docs/semantics.md, "Semi-global
+#: aggregation"): the path cost of the disparity b that was best SGM_TRACK_AGE (K) positions
+#: back, carried forward from SGM_TRACK_STEPS (J) positions back by adding the matching
+#: costs of b in between. Exact SGM's reference, the minimum over all D path costs of the
+#: position just before, cannot close at one position per clock; this one needs nothing
+#: newer than J positions back. Why these values: at one position per clock (R = 1) the
+#: K - J = 12 positions cover the registered argmin tree over D <= 256 (8 levels) and its
+#: hand-off, and the J positions the registers of the multiplexer that picks lane b and the
+#: final additions. docs/sgm/left_path_study.py measured J = 4, K = 16 within 0.05 points
+#: of exact SGM (docs/sgm.md, "The left path's reference").
+SGM_TRACK_STEPS = 4
+SGM_TRACK_AGE = 16
 
 #: The recommended SGM penalties, chosen by measurement together with census 7x7
 #: (docs/quality.md, "SGM: choosing the defaults"): P1, P2 and the adaptive-P2 exponent t.
@@ -127,7 +141,8 @@ def check_penalties(max_cost, p1, p2, adapt=None):
 
 
 def sgm_path_cost_bits(max_cost, p2):
-    """Width of a path cost L_r and of its minimum: bitlen(Cmax + P2).
+    """Width of a path cost L_r of a path from the row above and of its minimum:
+    bitlen(Cmax + P2).
 
     Every candidate of the recurrence's minimum is >= the predecessor's minimum m and the
     last one is m + P2, so 0 <= L_r <= Cmax + P2 (docs/semantics.md, "Widths").
@@ -135,6 +150,33 @@ def sgm_path_cost_bits(max_cost, p2):
     return (int(max_cost) + int(p2)).bit_length()
 
 
-def sgm_summed_cost_bits(max_cost, p2, paths=SGM_PATH_COUNT):
-    """Width of the summed cost S over ``paths`` paths: bitlen(paths (Cmax + P2))."""
-    return (paths * (int(max_cost) + int(p2))).bit_length()
+def _left_bound(max_cost, p2):
+    """K Cmax + P2, the largest L of the left path (docs/semantics.md, "Widths")."""
+    return SGM_TRACK_AGE * int(max_cost) + int(p2)
+
+
+def sgm_left_cost_bits(max_cost, p2):
+    """Width of the left path's L: bitlen(K Cmax + P2).
+
+    Its reference of the large step is an upper bound of the previous position's minimum
+    m(x - 1) that exceeds the minimum K positions back by at most (K - 1) Cmax, and m never
+    decreases along the row, so 0 <= L <= K Cmax + P2 (docs/semantics.md, "Widths").
+    """
+    return _left_bound(max_cost, p2).bit_length()
+
+
+def sgm_left_loop_bits(max_cost, p1, p2):
+    """Width n of the hardware's unnormalised left path cost Lu, kept modulo 2^n.
+
+    All values a step compares lie in [m(x-1), m(x-1) + K Cmax + P2 + P1], and the values of
+    one position in [m(x-1), m(x-1) + K Cmax + P2]: every difference is below 2^(n-1), so
+    the sign bit of an n-bit difference orders them (docs/semantics.md, "Widths").
+    """
+    return (_left_bound(max_cost, p2) + int(p1)).bit_length() + 1
+
+
+def sgm_summed_cost_bits(max_cost, p2):
+    """Width of the summed cost S of all paths: bitlen((K Cmax + P2) + 3 (Cmax + P2)), the
+    left path's bound plus the three paths from the row above."""
+    rows = SGM_PATH_COUNT - 1
+    return (_left_bound(max_cost, p2) + rows * (int(max_cost) + int(p2))).bit_length()

@@ -3,8 +3,10 @@
 The stage alone: :class:`SemiGlobalAggregation` is fed random cost volumes and gray images
 position by position -- a partial frame and rows above the frame first, slots without a
 position in between (random inputs in them), every memory full of random words -- and every
-S(x, y, d) of the frame is compared with ``golden.sgm.aggregate``; D/R from 1 to 4 lanes, R
-at its minimum and above, constant and adaptive P2, P1 = P2 = 0 and P2 at its largest.
+S(x, y, d) of the frame is compared with ``golden.sgm.aggregate``; R = 1 (D lanes, a loop of
+one clock), R = 2, R >= 3 (the two-clock lane update), R = D and odd splits, rows longer than
+K so that the tracked reference comes from the history, constant and adaptive P2, P1 = P2 = 0
+and P2 at its largest.
 The core: whole frames through :class:`NpStereoCore` in Amaranth's simulator against
 ``golden.pipeline.disparity_map`` (which dispatches to golden.sgm), all four transforms,
 random source gaps and sink backpressure, frames back to back, a reset in mid-frame,
@@ -23,6 +25,7 @@ from amaranth.sim import Simulator
 from npstereo.golden import sgm as golden_sgm
 from npstereo.hdl import calculation_stage, plan, plan_memories, plan_timing
 from npstereo.hdl import sgm as hdl_sgm
+from npstereo.hdl import sgm_left
 from npstereo.hdl.core import NpStereoCore
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
 from npstereo.params import ParameterError, StereoParams
@@ -145,12 +148,14 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
 
 STAGES = [
     # transform, block, D, R, P1, P2, t, width, height
-    ("census", 3, 8, 8, 3, 20, 2, 10, 5),            # one lane, R at its minimum
-    ("census", 5, 16, 8, 16, 96, 4, 18, 4),          # two lanes, the minimum R for D = 16
+    ("census", 3, 8, 8, 3, 20, 2, 10, 5),            # one lane, R = D
+    ("census", 3, 4, 1, 3, 20, 2, 22, 3),            # R = 1: four lanes, one clock a position
+    ("census", 5, 8, 1, 16, 96, 4, 20, 3),           # R = 1, eight lanes (T = 3)
+    ("census", 5, 16, 2, 16, 96, 4, 20, 3),          # R = 2, eight lanes
     ("census", 3, 24, 8, 4, 20, None, 26, 3),        # three lanes, constant P2
-    ("rank", 5, 32, 8, 7, 40, 5, 34, 2),             # four lanes (T = 2), the minimum R
+    ("rank", 5, 15, 3, 7, 40, 5, 19, 3),             # R = 3, five lanes: the two-clock update
     ("ext-rank", 3, 12, 12, 0, 0, None, 14, 4),      # P1 = P2 = 0, 11-bit path costs
-    ("ext-census", 3, 6, 6, 2000, 6151, 1, 8, 5),    # P2 = P2max, t = 1
+    ("ext-census", 3, 6, 2, 2000, 6151, 1, 21, 3),   # P2 = P2max, t = 1, wide Lu
 ]
 
 
@@ -176,21 +181,26 @@ def test_broken_variant_baseline_matches(monkeypatch):
     check_stage(BROKEN, monkeypatch, seed=7)
 
 
-def test_broken_left_normalisation_is_caught(monkeypatch):
-    """The left path's L formed without subtracting m(x - 1)."""
-    real = hdl_sgm._materialise
-    monkeypatch.setattr(hdl_sgm, "_materialise", lambda ca, e, cp, cpp, minimum, minimum_p1:
-                        real(ca, e, cp, cpp, 0, minimum_p1))
+def test_broken_left_reference_is_caught(monkeypatch):
+    """The left path's large step left out of its minimum (ref + P2 never taken)."""
+    real = sgm_left._minimum
+    monkeypatch.setattr(sgm_left, "_minimum", lambda candidates, bits:
+                        real(candidates[:3], bits))
     assert_stage_caught(monkeypatch)
 
 
-def test_broken_left_minimum_is_caught(monkeypatch):
-    """m(x) taken as min(U, Cmin + P2), forgetting that U carries m(x - 1)."""
-    real = hdl_sgm._next_minimum
-    monkeypatch.setattr(hdl_sgm, "_next_minimum",
-                        lambda total, bound, previous, previous_p1, capped, capped_p1, fresh:
-                        real(total, bound, 0, previous_p1, capped, capped_p1, fresh))
-    assert_stage_caught(monkeypatch)
+def test_broken_left_history_is_caught(monkeypatch):
+    """b(x) from the history one position too new (argmin of x - K + 1): rows longer than
+    K catch it."""
+    params = sgm_params("census", 3, 4, 1, 3, 20, 2, width=22, height=3)
+    real = sgm_left._picks
+
+    def shifted(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
+        def later(offset):
+            return column(offset) + 1
+        return real(owner, m, later, fresh_at, history, b0, lu, chosen, sums)
+    monkeypatch.setattr(sgm_left, "_picks", shifted)
+    assert_stage_caught(monkeypatch, params)
 
 
 def test_broken_top_left_border_is_caught(monkeypatch):
@@ -230,8 +240,8 @@ def test_broken_row_normalisation_is_caught(monkeypatch):
 CORES = [
     # transform, block, D, R, P1, P2, t (None: the default), L/R threshold, image kind, W, H
     ("census", 3, 8, 8, 3, 20, 2, 1, "layers", 20, 6),
-    ("rank", 5, 16, 8, 8, 30, 0, None, "independent", 24, 5),     # two lanes, R minimal
-    ("ext-rank", 3, 24, 8, None, None, None, 1, "random", 30, 4),  # three lanes, R minimal
+    ("rank", 5, 4, 1, 8, 30, 0, None, "independent", 24, 5),      # R = 1, four lanes
+    ("ext-rank", 3, 6, 2, None, None, None, 1, "random", 26, 4),   # R = 2, three lanes
     ("ext-census", 3, 12, 12, 300, 2000, 3, 0, "independent", 18, 5),
     ("census", 7, 8, 8, None, None, None, 3, "layers", 16, 6),     # the SGM defaults
 ]
@@ -278,43 +288,32 @@ def test_broken_missing_pair_cost_is_caught(monkeypatch):
 
 # The plan ----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("disparities,rounds", [(8, 8), (16, 8), (24, 8), (12, 12),
-                                                (40, 10), (64, 16), (100, 10), (256, 16),
-                                                (7, 7), (5, None)])
-def test_minimum_rounds(disparities, rounds):
-    """R >= ceil(log2(D/R)) + 6: the smallest divisor of D that fits."""
-    assert plan_timing.sgm_min_rounds(disparities) == rounds
-
-
-@pytest.mark.parametrize("disparities,rounds,message", [
-    (8, 4, "aggregation sgm needs rounds >= 8 for 8 disparities (the left path's loop "
-           "takes 7 clocks at 2 per round), not 4"),
-    (100, 5, "aggregation sgm needs rounds >= 10 for 100 disparities (the left path's loop "
-             "takes 11 clocks at 20 per round), not 5"),
-    (4, 4, "aggregation sgm needs rounds >= 6 (the left path's loop), so disparities >= 6, "
-           "not 4"),
-])
-def test_too_few_rounds_are_refused(disparities, rounds, message):
+@pytest.mark.parametrize("disparities,rounds", [(4, 1), (64, 1), (256, 1), (100, 5),
+                                                (7, 7), (256, 2), (9, 3)])
+def test_any_rounds_dividing_d_are_built(disparities, rounds):
+    """No rounds restriction: the timing's margins hold for every R that divides D <= 256
+    (plan_timing asserts them), and the plan accepts it."""
     params = sgm_params("census", 5, disparities, rounds, width=disparities + 4, height=4)
-    with pytest.raises(ParameterError) as error:
-        plan.check_buildable(params)
-    assert str(error.value) == message
-    with pytest.raises(ParameterError, match="needs rounds"):
-        NpStereoCore(params)
-    # The smallest R that fits is built.
-    enough = plan_timing.sgm_min_rounds(disparities)
-    if enough is not None:
-        plan.check_buildable(params.replace(rounds=enough))
+    plan.check_buildable(params)
+    timing = plan_timing.sgm_timing(params)
+    assert timing.left_stages == (1 if rounds < 3 else 2)
+
+
+def test_rounds_not_dividing_d_are_refused():
+    with pytest.raises(ParameterError, match="rounds must divide disparities"):
+        sgm_params("census", 5, 100, 3, width=104, height=4)
 
 
 def test_sgm_memories_within_the_budget():
     """At 450 x 375, D = 100, R = 10 with the defaults: 3 x 450 x 100 x 7 bits of path
-    costs, 3 x 450 x 7 of minima, two stores of 10 words, and all of SGM's memory beside
-    the box configuration's under 1 Mibit."""
+    costs, 3 x 450 x 7 of minima, the left path's store of 10 words of 10 x 11 bits and
+    its first lanes, the top-left store, and all of SGM's memory beside the box
+    configuration's under 1 Mibit."""
     params = sgm_params("census", 7, 100, 10, width=450, height=375)
     kinds = {memory.name: memory.bits for memory in plan_memories.sgm_memories(params)}
     assert kinds == {"path rows (top, top-left)": 630_000, "path rows (top-right)": 315_000,
-                     "path minima": 9_450, "left path store": 700, "top-left store": 700}
+                     "path minima": 9_450, "left path store": 1_100,
+                     "left path first lanes": 110, "top-left store": 700}
     box = params.replace(aggregation=3, p1=None, p2=None, p2_adapt=None)
     assert plan_memories.memory_bits(params) - plan_memories.memory_bits(box) < 1 << 20
     # Counterpart: one more step of P2 makes the path cost 8 bits, and the rows of path

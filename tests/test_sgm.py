@@ -19,8 +19,9 @@ import pytest
 
 from npstereo.golden import pipeline, sgm
 from npstereo.params import (SGM_DEFAULT_P1, SGM_DEFAULT_P2, SGM_PATH_STEPS, SGM_PATHS,
-                             SGM_RECOMMENDED, TRANSFORMS, ParameterError, StereoParams, check_penalties,
-                             check_sgm_paths, max_path_penalty, sgm_path_cost_bits,
+                             SGM_RECOMMENDED, TRANSFORMS, ParameterError, StereoParams,
+                             check_penalties, check_sgm_paths, max_path_penalty,
+                             sgm_left_cost_bits, sgm_left_loop_bits, sgm_path_cost_bits,
                              sgm_path_steps, sgm_summed_cost_bits)
 
 import reference
@@ -30,6 +31,8 @@ import reference
 #: Predecessor offsets, written out again (not imported) so a wrong table in the golden
 #: model cannot agree with itself.
 REF_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
+#: The left path's tracking constants J and K, written out again for the same reason.
+REF_J, REF_K = 4, 16
 
 
 def ref_bit_length(value):
@@ -59,6 +62,10 @@ def ref_p2(image, x, y, px, py, p1, p2, adapt):
 
 def ref_path(costs, path, p1, p2, image=None, adapt=None):
     """L_r[y][x][d] of one path, visiting pixels in raster order."""
+    if path == "left":
+        return [ref_left_row(row, p1, [ref_p2(image, x, y, x - 1, y, p1, p2, adapt)
+                                       if x else p2 for x in range(len(row))])
+                for y, row in enumerate(costs)]
     height, width, disparities = len(costs), len(costs[0]), len(costs[0][0])
     dx, dy = REF_STEPS[path]
     out = [[None] * width for _ in range(height)]
@@ -82,6 +89,36 @@ def ref_path(costs, path, p1, p2, image=None, adapt=None):
                 row.append(here[d] + min(candidates) - low)
             out[y][x] = row
     return out
+
+
+def ref_tracked(unnormalised, costs, x):
+    """ref(x) of the left path: Lu(s, b) + C(s+1, b) + ... + C(x-1, b) with s = max(x-J, 0)
+    and b the lowest d of the smallest Lu(max(x-K, 0), d)."""
+    old = unnormalised[max(x - REF_K, 0)]
+    b = old.index(min(old))
+    s = max(x - REF_J, 0)
+    return unnormalised[s][b] + sum(costs[i][b] for i in range(s + 1, x))
+
+
+def ref_left_row(costs, p1, penalties, reference=ref_tracked):
+    """The left path of one row: unnormalised Lu in Python integers, then L(x, d) =
+    Lu(x, d) - min_d Lu(x-1, d). ``penalties[x]`` is P2(x); ``reference(Lu, C, x)`` the
+    reference of the large step."""
+    costs = [[int(c) for c in column] for column in costs]
+    disparities = len(costs[0])
+    lu = [costs[0]]
+    for x in range(1, len(costs)):
+        previous, ref = lu[x - 1], reference(lu, costs, x)
+        column = []
+        for d in range(disparities):
+            candidates = [previous[d], ref + penalties[x]]
+            if d > 0:
+                candidates.append(previous[d - 1] + p1)
+            if d < disparities - 1:
+                candidates.append(previous[d + 1] + p1)
+            column.append(costs[x][d] + min(candidates))
+        lu.append(column)
+    return [lu[0]] + [[value - min(lu[x - 1]) for value in lu[x]] for x in range(1, len(lu))]
 
 
 def ref_summed(costs, paths, p1, p2, image=None, adapt=None):
@@ -304,16 +341,92 @@ def test_frame_of_one_row_and_one_column():
             assert np.array_equal(golden_path(costs, path, 2, 10, max_cost=24), expected)
 
 
+# The left path's reference ----------------------------------------------------------------------
+
+LEFT_CASES = [
+    # height, width, D, Cmax, P1, P2, costs drawn from
+    (3, 40, 5, 24, 3, 20, "random"),
+    (4, 37, 6, 3, 1, 2, "levels"),       # costs 0 .. 3: ties everywhere, argmin ties too
+    (2, 45, 1, 24, 0, 0, "random"),      # one disparity
+    (3, 33, 8, 48, 24, 79, "extreme"),   # costs 0 and Cmax only
+]
+
+
+def left_volume(rng, height, width, disparities, cmax, kind):
+    if kind == "levels":
+        return rng.integers(0, cmax + 1, (height, width, disparities))
+    return random_volume(rng, height, width, disparities, cmax, extreme=kind == "extreme")
+
+
+@pytest.mark.parametrize("height, width, D, cmax, p1, p2, kind", LEFT_CASES)
+def test_left_path_tracks_the_best_disparity(height, width, D, cmax, p1, p2, kind):
+    """Rows longer than K, so that b comes from x - K and the sum from x - J."""
+    costs = left_volume(np.random.default_rng(width), height, width, D, cmax, kind)
+    expected = as_array(ref_path(costs.tolist(), "left", p1, p2))
+    assert np.array_equal(golden_path(costs, "left", p1, p2, max_cost=cmax), expected)
+    # The tracked reference is not the exact minimum: the comparison can tell them apart.
+    exact = as_array([ref_left_row(row, p1, [p2] * width, lambda lu, c, x: min(lu[x - 1]))
+                      for row in costs.tolist()])
+    assert D == 1 or not np.array_equal(exact, expected)
+
+
+def exact_reference(path, costs, best, x, index):
+    """Exact SGM's reference, min_d Lu(x - 1, d), in the golden model's signature."""
+    return path[x - 1].min(axis=1)
+
+
+@pytest.mark.parametrize("height, width, D, cmax, p1, p2, kind", LEFT_CASES)
+def test_left_path_with_the_exact_minimum_is_exact_sgm(monkeypatch, height, width, D, cmax,
+                                                       p1, p2, kind):
+    """With ref(x) = min_d Lu(x-1, d) the left path is exact SGM: the normalised recurrence
+    of the paths from above (the top path of the transposed volume)."""
+    costs = left_volume(np.random.default_rng(D), height, width, D, cmax, kind)
+    exact = as_array(ref_path(costs.transpose(1, 0, 2).tolist(), "top", p1, p2))
+    monkeypatch.setattr(sgm, "_tracked_reference", exact_reference)
+    got = golden_path(costs, "left", p1, p2, max_cost=cmax)
+    assert np.array_equal(got, exact.transpose(1, 0, 2))
+
+
+def left_width_violations(seed):
+    """Left path values outside 0 .. K Cmax + P2 over random volumes (none allowed)."""
+    found = 0
+    for k, (cmax, p1, p2) in enumerate([(24, 1, 2), (48, 24, 79), (8, 0, 0), (24, 12, 103)]):
+        rng = np.random.default_rng(seed + k)
+        for kind in ("random", "extreme", "levels"):
+            costs = left_volume(rng, 4, 60, 6, cmax, kind)
+            got = golden_path(costs, "left", p1, p2, max_cost=cmax)
+            # A negative L wraps above the bound in the golden model's unsigned dtype.
+            found += int(np.count_nonzero(got > REF_K * cmax + p2))
+    return found
+
+
+def test_left_path_widths_hold():
+    assert left_width_violations(seed=5) == 0
+
+
+def test_broken_stale_minimum_breaks_the_widths(monkeypatch):
+    """The minimum of K positions back as the reference (no tracking): it falls behind
+    m(x - 1) and L leaves its range."""
+    def stale(path, costs, best, x, index):
+        return path[max(x - REF_K, 0)].min(axis=1)
+    monkeypatch.setattr(sgm, "_tracked_reference", stale)
+    assert left_width_violations(seed=5) > 0
+
+
 # Widths ---------------------------------------------------------------------------------------
 
 
 def test_widths_formulae():
-    assert (sgm_path_cost_bits(24, 64), sgm_summed_cost_bits(24, 64)) == (7, 9)
+    # Census 5x5, P2 = 64: L of the left path <= 16 x 24 + 64 = 448 (9 bits), S <= 448 +
+    # 3 x 88 = 712 (10 bits); modulo 2^n with 2^(n-1) > 448 + P1.
+    assert (sgm_path_cost_bits(24, 64), sgm_left_cost_bits(24, 64),
+            sgm_summed_cost_bits(24, 64)) == (7, 9, 10)
+    assert sgm_left_loop_bits(24, 63, 64) == 10 and sgm_left_loop_bits(24, 64, 64) == 11
     assert max_path_penalty(24) == 103 and sgm_path_cost_bits(24, 103) == 7
     assert sgm_path_cost_bits(80, 47) == 7 and sgm_path_cost_bits(80, 48) == 8
-    defaults = StereoParams(**SGM_RECOMMENDED[0])  # census 7x7, P2 = 79
-    assert (defaults.cost_bits, defaults.path_cost_bits,
-            defaults.aggregated_cost_bits) == (6, 7, 9)
+    defaults = StereoParams(**SGM_RECOMMENDED[0])  # census 7x7, P2 = 79: 847, 1228, 871
+    assert (defaults.cost_bits, defaults.path_cost_bits, defaults.left_cost_bits,
+            defaults.aggregated_cost_bits, defaults.left_loop_bits) == (6, 7, 10, 11, 11)
 
 
 @pytest.mark.parametrize("cmax", [1, 24, 48, 6120, 91800])
@@ -330,23 +443,24 @@ def test_widths_hold_at_extreme_costs(cmax, adapt):
         expected = as_array(ref_path(costs.tolist(), path, p1, p2, image, adapt))
         got = golden_path(costs, path, p1, p2, image, adapt, max_cost=cmax)
         assert np.array_equal(got, expected), path
-        assert 0 <= expected.min() and expected.max() <= cmax + p2 < \
-            2 ** sgm_path_cost_bits(cmax, p2)
+        bound = REF_K * cmax + p2 if path == "left" else cmax + p2
+        bits = sgm_left_cost_bits(cmax, p2) if path == "left" else sgm_path_cost_bits(cmax, p2)
+        assert 0 <= expected.min() and expected.max() <= bound < 2 ** bits
         parts.append(got)
     assert sum(parts).max() < 2 ** sgm_summed_cost_bits(cmax, p2)
 
 
 @pytest.mark.parametrize("cmax, p1, p2", [(24, 12, 103), (24, 1, 24), (80, 0, 431), (3, 3, 3)])
 def test_path_width_bound_is_reached(cmax, p1, p2):
-    """A row of costs [0, Cmax, ..., Cmax] drives the far disparity to exactly Cmax + P2,
-    so bitlen(Cmax + P2) bits are needed, not just sufficient."""
-    # Each step along the row can raise the far disparities by at most Cmax, and P1 = 0
-    # lets a disparity rise only as far as its distance from d = 0 allows: enough of both.
+    """A column of costs [0, Cmax, ..., Cmax] drives the far disparity of the top path to
+    exactly Cmax + P2, so bitlen(Cmax + P2) bits are needed, not just sufficient."""
+    # Each step down can raise the far disparities by at most Cmax, and P1 = 0 lets a
+    # disparity rise only as far as its distance from d = 0 allows: enough of both.
     disparities = p2 // cmax + 3
-    row = [[0] + [cmax] * (disparities - 1)] * (p2 // cmax + 5)
-    costs = np.array([row], dtype=np.int64)
-    expected = as_array(ref_path(costs.tolist(), "left", p1, p2))
-    got = golden_path(costs, "left", p1, p2, max_cost=cmax)
+    column = [[[0] + [cmax] * (disparities - 1)]] * (p2 // cmax + 5)
+    costs = np.array(column, dtype=np.int64)
+    expected = as_array(ref_path(costs.tolist(), "top", p1, p2))
+    got = golden_path(costs, "top", p1, p2, max_cost=cmax)
     assert np.array_equal(got, expected)
     assert got.max() == cmax + p2
 

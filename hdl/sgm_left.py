@@ -1,0 +1,304 @@
+"""The left path of semi-global aggregation in hardware, at any number of rounds R.
+
+Part of :class:`npstereo.hdl.sgm.SemiGlobalAggregation`; docs/semantics.md ("The left
+path") is the contract, docs/hardware.md ("Semi-global aggregation") the structure. The
+unnormalised path cost Lu is kept modulo 2^n (``params.left_loop_bits``): every pair of
+values compared differs by less than 2^(n-1), so the sign bit of an n-bit difference
+orders them.
+
+**The loop.** Per lane, Lu(x, d) = C(x, d) + min(Lu(x-1, d), Lu(x-1, d +- 1) + P1,
+ref(x) + P2(x)); Lu(x-1, .) of round j is word j of a store of R words (a register at
+R = 1), the neighbour d - 1 across the round's lower edge is the last lane of the word the
+previous round read (registered), the neighbour d + 1 across the upper edge the first lane
+of word j + 1 (a store of its own). Round j + 1 of x - 1 is written R - 1 clocks (back to
+back) before round j of x reads it: one clock of logic at R <= 2, two (the comparisons,
+then the choice and the addition) from R = 3 on. ref(x) + P2(x) is one register per group
+of lanes, constant through the slot: nothing inside the loop spans all D disparities.
+
+**The reference.** ref(x) = Lu(s, b) + C(s+1, b) + ... + C(x-1, b), s = max(x - J, 0),
+b = b(x) the argmin over d of Lu(max(x - K, 0), .):
+
+- a registered argmin tree over the lanes of Lu, then a running argmin over the rounds,
+  gives m(x) and G(x) = argmin Lu(x, .) (as round and lane), written into a file of K
+  entries indexed by x mod K; b(x) is entry (x - K) mod K, or G(0) for x <= K, which an
+  argmin over C(0, .) = Lu(0, .) gives early (handed from position to position);
+- at position p, for k = 1 .. J - 1, C(p, b(p + k)) is picked (a two-clock multiplexer
+  per round, kept when b's round passes) into a file of J entries indexed by p mod J;
+  Lu(p, b(p + J)) likewise from the loop's output;
+- position x adds what positions x - J .. x - 1 left for it and P2(x) (m(0) instead of
+  Lu(0, b) for x <= J, no C of columns < 1).
+
+Files indexed by the column, not shift registers, so that what a position reads does not
+depend on the gaps between positions; every step is at a fixed offset after its position's
+slot (``plan_timing.sgm_timing`` derives them and checks the margins), files and stores
+are written only in slots with a position.
+
+**The output.** L(x, d) = Lu(x, d) - m(x - 1) (Lu(0, d) at x = 0): Lu delayed until
+m(x - 1), the exact minimum over D of the previous position, is there.
+"""
+
+from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
+
+from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
+from .common import Store, bits_for
+from .trees import build_tree, register_plan
+
+__all__ = ["left_path"]
+
+
+def _less(a, b, bits):
+    """a < b for values kept modulo 2^bits that differ by less than 2^(bits - 1)."""
+    return (a - b)[bits - 1]
+
+
+def _minimum(candidates, bits):
+    """The smallest of ``candidates`` (ties to the first): all comparisons side by side,
+    then a one-hot choice. Returns (comparison bits, choice from them)."""
+    count = len(candidates)
+    beats = {(i, k): _less(candidates[i], candidates[k], bits)
+             for i in range(count) for k in range(count) if i > k}
+
+    def choose(beats):
+        value = Const(0, bits)
+        for i, candidate in enumerate(candidates):
+            wins = Const(1)
+            for k in range(count):
+                if k < i:
+                    wins &= beats[(i, k)]
+                elif k > i:
+                    wins &= ~beats[(k, i)]
+            value |= Mux(wins, candidate, 0)
+        return value
+    return beats, choose
+
+
+def _register(m, value, shape, name, enable=None):
+    reg = Signal(shape, name=name, reset_less=True)
+    if enable is None:
+        m.d.sync += reg.eq(value)
+    else:
+        with m.If(enable):
+            m.d.sync += reg.eq(value)
+    return reg
+
+
+def _taps(m, value, depth, name):
+    taps = [value]
+    for k in range(depth):
+        taps.append(_register(m, taps[-1], value.shape(), f"{name}_d{k + 1}"))
+    return taps
+
+
+def _file(m, count, shape, name):
+    """``count`` registers read by a column index (its low bits)."""
+    return [Signal(shape, name=f"{name}{k}", reset_less=True) for k in range(count)]
+
+
+def _pick(m, values, lane, name):
+    """values[lane] in two clocks: the lane's low bits select within groups (registered),
+    the high bits the group (returned combinationally, a clock after ``values``)."""
+    width = len(values[0])
+    if len(values) == 1:
+        return _register(m, values[0], width, f"{name}_g0")
+    low = (len(lane) + 1) // 2
+    size = 1 << low
+    groups = [_register(m, Array(values[k:k + size])[lane[:low]], width, f"{name}_g{k}")
+              for k in range(0, len(values), size)]
+    high = _register(m, lane[low:], max(1, len(lane) - low), f"{name}_high")
+    return groups[0] if len(groups) == 1 else Array(groups)[high]
+
+
+def _argmin(m, values, less, name):
+    """(value, lane) of the smallest of ``values``, ties to the lowest lane: a tree with a
+    register after every level."""
+    lane_bits = bits_for(len(values) - 1)
+
+    def smaller(lower, upper):
+        take = less(upper[0], lower[0])
+        return Mux(take, upper[0], lower[0]), Mux(take, upper[1], lower[1])
+    leaves = [(v, Const(i, lane_bits)) for i, v in enumerate(values)]
+    return build_tree(m, 1, leaves, smaller, register_plan(len(values), 1))
+
+
+def _running_argmin(owner, m, item, offset, less, name):
+    """Over a slot's rounds, the smallest ``item`` (value, lane) of each round (round j's at
+    ``offset`` + j), ties to the earliest round: (value, round, lane) registers holding the
+    result in the clock ``offset`` + R."""
+    slots, rounds = owner._slots, owner.params.rounds
+    value, lane = item
+    best = Signal(value.shape(), name=f"{name}_value", reset_less=True)
+    best_lane = Signal(lane.shape(), name=f"{name}_lane", reset_less=True)
+    best_round = Signal(bits_for(rounds - 1), name=f"{name}_round", reset_less=True)
+    restart = slots.first(offset) | less(value, best)
+    m.d.sync += [best.eq(Mux(restart, value, best)),
+                 best_lane.eq(Mux(restart, lane, best_lane)),
+                 best_round.eq(Mux(restart, slots.round(offset), best_round))]
+    return best, best_round, best_lane
+
+
+#: Lanes per copy of a scalar that every lane uses (ref + P2, the fresh start).
+_LANES_PER_COPY = 8
+
+
+def _copies(m, value, shape, lanes, name, enable=None):
+    """``value`` registered once per group of :data:`_LANES_PER_COPY` lanes: the list of
+    each lane's copy."""
+    groups = [_register(m, value, shape, f"{name}_copy{k}", enable)
+              for k in range(-(-lanes // _LANES_PER_COPY))]
+    return [groups[i // _LANES_PER_COPY] for i in range(lanes)]
+
+
+def left_path(owner, m, fresh, p2):
+    """L of the left path per lane at ``timing.left`` (see the module docstring).
+
+    ``owner`` is the :class:`~.sgm.SemiGlobalAggregation` being elaborated (its slot
+    clock, costs taps, alignment helpers); ``fresh`` and ``p2`` are slot-aligned at
+    ``timing.guide``.
+    """
+    p, t, slots = owner.params, owner.timing, owner._slots
+    units, rounds, tree = p.per_round, p.rounds, t.tree
+    bits, cost_bits = p.left_loop_bits, p.cost_bits
+    steps, age = SGM_TRACK_STEPS, SGM_TRACK_AGE
+    assert steps & (steps - 1) == 0 and age & (age - 1) == 0, \
+        "the files are indexed by the column's low bits"
+    costs = owner._costs
+    loop, lu_at, argmin_at = t.loop, t.left_lu, t.left_argmin
+    lane_bits, round_bits = bits_for(units - 1), bits_for(rounds - 1)
+
+    def less(a, b):
+        return _less(a, b, bits)
+
+    def column(offset):
+        return owner._aligned(owner.tag.x, 0, offset, "sgm_left_x")
+
+    def valid(offset):
+        return slots.first(offset) & owner._valid_at(offset)
+
+    def fresh_at(offset):
+        return owner._aligned(fresh, t.guide, offset, "sgm_left_fresh")
+
+    # G(0) = argmin C(0, .) and m(0) early, from the costs: the row's first b and m.
+    early, hand = t.left_early, t.left_hand
+    item = _argmin(m, costs[0], lambda a, b: a < b, "sgm_left_c0")
+    first_m, first_round, first_lane = _running_argmin(owner, m, item, tree,
+                                                       lambda a, b: a < b, "sgm_left_c0")
+    start = valid(early) & fresh_at(early)
+    b0 = _register(m, Cat(first_lane, first_round), lane_bits + round_bits, "sgm_left_b0",
+                   start)
+    m0_held = _register(m, first_m, cost_bits, "sgm_left_m0_held", start)
+    # Written at a fresh start only, but at ``hand`` >= where x <= J read it, so that the
+    # next row's first position cannot overwrite it before the last reader of this row.
+    m0 = _register(m, m0_held, cost_bits, "sgm_left_m0", valid(hand) & fresh_at(hand))
+
+    # What positions x - J .. x - 1 leave for x: Lu(x - J, b(x)), C(x - k, b(x)).
+    history = _file(m, age, lane_bits + round_bits, "sgm_left_g")
+    chosen = _file(m, steps, bits, "sgm_left_v")
+    sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
+
+    # The loop: Lu(x - 1, .) of round j from the store at ``loop`` + j.
+    store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
+    word = store.read(slots.round(loop))
+    centre = [word[i * bits:(i + 1) * bits] for i in range(units)]
+    # The neighbours across the round's edges: the last lane of the word read a clock ago
+    # (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own). Outside
+    # 0 .. D-1 the lane itself stands in: Lu(d) + P1 never beats Lu(d).
+    before = _register(m, centre[units - 1], bits, "sgm_left_before")
+    below = Mux(slots.round(loop) == 0, centre[0], before)
+    firsts = None
+    if rounds > 1:
+        firsts = Store(m, "sgm_left_firsts", unsigned(bits), rounds)
+        # The round counter of a clock earlier reads j + 1 (mod R) in round j.
+        following = firsts.read(slots.round(loop - 1))
+        above = Mux(slots.round(loop) == rounds - 1, centre[units - 1], following)
+    else:
+        above = centre[units - 1]
+    neighbours = [below, *centre, above]
+    # ref(x) + P2(x), loaded in the clock before round 0 and held through the slot.
+    reference = _copies(m, _reference(owner, m, column, m0, p2, chosen, sums), bits, units,
+                        "sgm_left_ref", slots.first(loop - 1))
+    last = loop + t.left_stages - 1           # the clock that writes Lu(x, round j)
+    lanes = []
+    for i in range(units):
+        candidates = [centre[i], neighbours[i] + p.p1, neighbours[i + 2] + p.p1,
+                      reference[i]]
+        candidates = [c[:bits] for c in candidates]
+        beats, choose = _minimum(candidates, bits)
+        if t.left_stages == 2:
+            # Compare, then choose and add: the loop has R - 1 >= 2 clocks to spare.
+            candidates = [_register(m, c, bits, f"sgm_left_cand{i}_{k}")
+                          for k, c in enumerate(candidates)]
+            beats = {key: _register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
+                     for key, b in beats.items()}
+            _, choose = _minimum(candidates, bits)
+        lanes.append(choose(beats))
+    fresh_copies = _copies(m, fresh_at(last - 1), 1, units, "sgm_left_fresh_lane")
+    new = [(c + Mux(f, 0, best))[:bits]
+           for c, f, best in zip(costs[last], fresh_copies, lanes)]
+    store.write(slots.round(last), Cat(*new), owner._valid_at(last))
+    if firsts is not None:
+        firsts.write(slots.round(last), new[0], owner._valid_at(last))
+    lu = [_register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
+
+    # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
+    item = _argmin(m, lu, less, "sgm_left_lu_min")
+    minimum, best_round, best_lane = _running_argmin(owner, m, item, lu_at + tree, less,
+                                                     "sgm_left_lu_min")
+    done = valid(argmin_at)
+    previous_m = _register(m, minimum, bits, "sgm_left_m", done)
+    x = column(argmin_at)
+    for k, entry in enumerate(history):
+        with m.If(done & (x[:age.bit_length() - 1] == k)):
+            m.d.sync += entry.eq(Cat(best_lane, best_round))
+    _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums)
+
+    # L(x, d) = Lu(x, d) - m(x - 1): Lu waits for m(x - 1).
+    out = t.left - 1
+    fresh_out = fresh_at(out)
+    delayed = [_taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
+    return [_register(m, (v - Mux(fresh_out, 0, previous_m))[:p.left_cost_bits],
+                      p.left_cost_bits, f"sgm_left_l{i}") for i, v in enumerate(delayed)]
+
+
+def _reference(owner, m, column, m0, p2, chosen, sums):
+    """ref(x) + P2(x) in the clock ``loop`` - 1: P2 and the C(x - k, b(x)) that exist
+    (x - k >= 1) added a clock before, then Lu(x - J, b(x)), or m(0) for x <= J."""
+    t, steps = owner.timing, SGM_TRACK_STEPS
+    bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
+    at = t.loop - 2
+    x = column(at)
+    total = owner._aligned(p2, t.guide, at, "sgm_left_p2")
+    for k, entries in enumerate(sums, 1):
+        total = total + Mux(x > k, Array(entries)[(x - k)[:index]], 0)
+    total = _register(m, total[:bits], bits, "sgm_left_csum")
+    x = column(at + 1)
+    start = Mux(x <= steps, m0, Array(chosen)[x[:index]])
+    return (start + total)[:bits]
+
+
+def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
+    """At position p, for k = 1 .. J: b(p + k) from the history (G(0) for p + k <= K), and
+    C(p, b(p + k)) into ``sums[k - 1]`` (k < J) or Lu(p, b(p + J)) into ``chosen``, each
+    at entry p mod J, in the round that holds b."""
+    p, t, slots = owner.params, owner.timing, owner._slots
+    steps, age = SGM_TRACK_STEPS, SGM_TRACK_AGE
+    lane_bits = bits_for(p.per_round - 1)
+    index = steps.bit_length() - 1
+    for k, at in enumerate(t.left_picks, 1):
+        x = column(at)
+        wanted = Mux(x + k <= age, b0, Array(history)[(x + k)[:age.bit_length() - 1]])
+        b = _register(m, wanted, len(b0), f"sgm_left_b{k}", slots.first(at))
+        lane, round_ = b[:lane_bits], b[lane_bits:]
+        if k < steps:
+            values, files, picked_at = owner._costs[at + 1], sums[k - 1], at + 2
+        else:
+            values, files, picked_at = lu, chosen, t.left_lu + 1
+        picked = _pick(m, values, lane, f"sgm_left_pick{k}")
+        # b holds for R clocks only: its round is compared beside the first pick level.
+        match = _register(m, slots.round(picked_at - 1) == round_, 1, f"sgm_left_match{k}")
+        here = column(picked_at)[:index]
+        write = owner._valid_at(picked_at) & match
+        if k == steps:
+            write &= ~fresh_at(picked_at)   # x <= J take m(0) instead
+        for e, entry in enumerate(files):
+            with m.If(write & (here == e)):
+                m.d.sync += entry.eq(picked)
