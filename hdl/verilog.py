@@ -15,7 +15,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .core import NpStereoCore
-from .plan import check_buildable, latency, output_width
+from .plan import latency, output_width
 
 __all__ = ["TOP_NAME", "AxiTop", "core_verilog", "header"]
 
@@ -54,11 +54,13 @@ def header(params):
 
 
 class AxiTop(wiring.Component):
-    """The core with AXI4-Stream ports: ``s_axis_*`` in, ``m_axis_*`` out (docs/semantics.md,
-    "Hardware interface"), ``framing_error``; no logic of its own."""
+    """A core (:class:`~.core.NpStereoCore`) with AXI4-Stream ports: ``s_axis_*`` in,
+    ``m_axis_*`` out (docs/semantics.md, "Hardware interface"), ``framing_error``; no logic
+    of its own. It takes a core already built, so that parameters the hardware refuses
+    never leave a half-made top level behind."""
 
-    def __init__(self, params):
-        self.core = NpStereoCore(params)
+    def __init__(self, core):
+        self.core = core
         pixels = len(self.core.sink.payload.data.as_value())
         disparities = len(self.core.source.payload.data.as_value())
         super().__init__({
@@ -92,8 +94,8 @@ def core_verilog(params):
     ------
     ParameterError
         If the image size is missing or beyond what the hardware is generated for
-        (:func:`~.plan.check_buildable`), before anything is elaborated.
+        (:func:`~.plan.check_buildable`), before anything is built.
     """
-    check_buildable(params)
-    text = amaranth_verilog.convert(AxiTop(params), name=TOP_NAME, emit_src=False)
+    text = amaranth_verilog.convert(AxiTop(NpStereoCore(params)), name=TOP_NAME,
+                                    emit_src=False)
     return header(params) + text
