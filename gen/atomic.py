@@ -19,6 +19,14 @@ class OutputError(UserError):
     """An output file that cannot be written."""
 
 
+def _new_file_mode():
+    """The mode ``open()`` gives a new file, 0666 less the umask: ``mkstemp`` makes 0600,
+    which would leave a generated core unreadable to the user's other tools and team."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
 def _failed(target, error):
     return OutputError(f"cannot write {target}: {error.strerror or error}")
 
@@ -41,6 +49,7 @@ def atomic_path(target, suffix=None):
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, _new_file_mode())
         os.replace(tmp, target)
     except BaseException as error:
         with contextlib.suppress(FileNotFoundError):

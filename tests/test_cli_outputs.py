@@ -4,7 +4,9 @@ naming the option and the path, exit code 2, and nothing is written. Also what k
 ``npstereo --help`` fast.
 """
 
+import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 
@@ -124,3 +126,16 @@ def test_help_loads_no_heavy_library(libraries_loaded):
         "matplotlib", "distributed", "dask", "amaranth", "cocotb", "tqdm", "PIL"})
     assert code == 0 and "explore" in output
     assert loaded == "[]"
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o077])
+def test_outputs_get_the_mode_of_a_new_file(tmp_path, umask):
+    """A written file is readable as a plainly created one would be (mkstemp's 0600 left a
+    generated core unreadable to the user's other tools); broken variant: the writer
+    without its chmod leaves 0600, which the umask 022 case rejects."""
+    old = os.umask(umask)
+    try:
+        write_text(tmp_path / "core.v", "module m; endmodule\n")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "core.v").stat().st_mode) == 0o666 & ~umask
