@@ -23,7 +23,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..params import (SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED, SGM_ROW_PATHS,
+from ..params import (SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS,
                       SGM_TRACK_AGE, SGM_TRACK_STEPS, ParameterError, StereoParams,
                       check_penalties, check_sgm_paths)
 from .data import check_gray_pair
@@ -33,9 +33,6 @@ from .transform import transform
 
 __all__ = ["cost_volume", "path_p2", "path_costs", "aggregate", "winners",
            "disparity_from_summed", "disparity_map"]
-
-# issue 26: gen/ still imports this; removed once gen is rewired
-RECOMMENDED = SGM_RECOMMENDED
 
 #: Elements of one band's cost volume in :func:`disparity_map` (rows x W x D): 4 Mi, a few
 #: MiB per band volume, so that memory stays bounded for any frame size while the left
