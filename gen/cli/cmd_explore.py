@@ -76,6 +76,9 @@ def _device_table(dev):
     lines += [f"| {r.name} | {r.capacity:,} | {r.unit} | {r.reference} |"
               for r in dev.resources]
     lines.append(f"| block RAM bits | {dev.block_ram_bits:,} | bit | from the row above |")
+    if dev.memory_bits != dev.block_ram_bits:
+        lines.append(f"| memory bits | {dev.memory_bits:,} | bit | block RAM and LUTRAM (64 "
+                     "bits each): what a core's memories are checked against before synthesis |")
     return lines
 
 
@@ -203,6 +206,7 @@ def run(args):
                          clock=args.clock, min_fps=args.min_fps)
     document = {"device": {"name": dev.name, "part": dev.part, "target": dev.target,
                            "block_ram_bits": dev.block_ram_bits,
+                           "memory_bits": dev.memory_bits,
                            "resources": [r.__dict__ for r in dev.resources]},
                 "scene": pair.name, "conditions": list(scenes), "width": args.width,
                 "height": args.height, "disparities": args.disparities, "pnr": args.pnr,

@@ -42,10 +42,16 @@ def _order(params):
 
 
 def _status_line(report):
-    return ", ".join(
-        f"{t} {r['status']}" + ("" if r["status"] == "ok" else f" ({r.get('message', '')})")
-        + (" (cached)" if r.get("cached") else "")
-        for t, r in report["results"].items())
+    return ", ".join(f"{t} {_status(r)}" + (" (cached)" if r.get("cached") else "")
+                     for t, r in report["results"].items())
+
+
+def _status(result):
+    """``ok``, or the status and its message (once: a fit verdict is its own status)."""
+    status, message = result["status"], result.get("message", "")
+    if status == "ok":
+        return status
+    return message if message.startswith(status) else f"{status} ({message})"
 
 
 def sweep_pnr(params, pnr):

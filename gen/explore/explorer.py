@@ -10,7 +10,9 @@ For each configuration of the grid it measures
 - frames per second at the hardware's frame size: Fmax (or the assumed clock without
   place and route) over :func:`~npstereo.hdl.plan.cycles_per_frame`;
 
-and says whether it fits the device (:mod:`npstereo.gen.flow.capacity`). The points are
+and says whether it fits the device (:mod:`npstereo.gen.flow.capacity`); a configuration
+whose memories the device cannot hold is told "does not fit (memory N %)" without a
+synthesis (:func:`~npstereo.gen.reports.synthesis.memory_refusal`). The points are
 then ranked: the Pareto front of quality against logic, and the recommendation (the best
 quality that fits the device at the required frame rate).
 
@@ -36,8 +38,10 @@ from ..atomic import OutputError
 from ..flow.capacity import DEFAULT_DEVICE, device as find_device, fit_message, usage, \
     utilisation
 from ..matching import match_images
-from ..reports.cache import golden_source_hash, read_result, source_hash, store_result
-from ..reports.synthesis import failed_report, lookup, store_report, synthesis_job
+from ..reports.cache import golden_source_hash, read_result, refused, source_hash, \
+    store_result
+from ..reports.synthesis import failed_report, lookup, refusal_report, store_report, \
+    synthesis_job
 from .engine import Task, TaskFailure, run_tasks, shared, task_key
 
 __all__ = ["Grid", "configurations", "scene_digest", "quality_task", "plan_tasks",
@@ -204,7 +208,11 @@ def plan_tasks(configs, scenes, dev, pnr, freq, timeout, cache, engine):
     hardware_sources = source_hash()
     for index in order:
         params = configs[index]
-        found = lookup(params, (dev.target,), pnr, freq, cache, _ecp5_part(dev, pnr))
+        # The device's memory is checked here, not by the synthesis task: the task checks
+        # an ECP5 synthesis against the 85k whatever the part (_ecp5_part), and a Cyclone V
+        # one against the A9, not the EP2S180.
+        found = (refusal_report(params, dev.target, dev)
+                 or lookup(params, (dev.target,), pnr, freq, cache, _ecp5_part(dev, pnr)))
         if found is not None:
             plan.synthesis[index] = found
             continue
@@ -290,8 +298,14 @@ def _point(params, index, scenes, plan, dev, pnr, clock):
              "quality": {label: plan.quality[(index, label)] for label in scenes},
              "synthesis": result, "cycles_per_frame": cycles_per_frame(params),
              "pareto": False}
-    synthesised = result["status"] in ("ok", "does not fit")
-    if synthesised:
+    # Figures exist after a synthesis that finished ("ok", "does not fit"); a core refused
+    # for its memory was not synthesised and has only its memory bits.
+    synthesised = result["status"] in ("ok", "does not fit") and not refused(result)
+    if refused(result):
+        point.update(logic=None, registers=None, memory_bits=result["memory_bits"],
+                     block_rams=None, logic_levels=None, used=None, utilisation=None,
+                     fits=False, verdict=result["message"])
+    elif synthesised:
         used = usage(result, dev)
         point.update(logic=used[dev.logic_resource.name], registers=result["registers"],
                      memory_bits=result["memory_bits"], block_rams=result["block_rams"],

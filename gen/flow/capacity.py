@@ -4,7 +4,9 @@ source, and whether a synthesis result fits.
 Place and route of a design above the device's capacity cannot succeed, and nextpnr takes
 minutes to say so (or hangs in the router); the check here answers from the synthesis
 counts at once. ``npstereo explore`` says of every configuration "fits" or "does not fit
-(112 % LUT)" for the user's device.
+(112 % LUT)" for the user's device. A core whose memories hold more bits than the device
+(:attr:`Device.memory_bits`) is refused before any synthesis: its bits are known from the
+parameters alone (:func:`memory_fit_message`).
 
 Each device is measured by one synthesis target (:data:`.tools.TARGETS`): the
 ECP5 parts by ``synth_ecp5`` (and ``nextpnr-ecp5`` for the clock), the Cyclone V by
@@ -14,12 +16,13 @@ two or four registers per ALM; the ALUT count is an estimate, the memory bits ar
 design's own and exact).
 """
 
+import math
 from dataclasses import dataclass
 
 from ...params import UserError
 
-__all__ = ["Resource", "Device", "DEVICES", "DEFAULT_DEVICE", "device", "usage", "utilisation",
-           "fit_message"]
+__all__ = ["Resource", "Device", "DEVICES", "DEFAULT_DEVICE", "CYCLONEV_DEVICE", "device",
+           "target_device", "usage", "utilisation", "fit_message", "memory_fit_message"]
 
 _ECP5_SHEET = "Lattice FPGA-DS-02012 (ECP5 and ECP5-5G Family Data Sheet), Table 1.1"
 _NEXTPNR = ("nextpnr-ecp5 device database ('Device utilisation' report of "
@@ -82,6 +85,15 @@ class Device:
     def capacity(self, name):
         return next(r.capacity for r in self.resources if r.name == name)
 
+    @property
+    def memory_bits(self):
+        """Bits the device's memories hold: its block RAM and, on the ECP5, its distributed
+        RAM (``LUTRAM``: a TRELLIS_DPR16X4 holds 16 words of 4 bits). The Cyclone V's MLABs
+        are not counted: the table counts them as logic (the ALUT resource), and the
+        EP2S180's RAM bits are all of its TriMatrix memory."""
+        lut_ram = sum(r.capacity for r in self.resources if r.name == "LUTRAM")
+        return self.block_ram_bits + _DPR16X4_BITS * lut_ram
+
 
 def _ecp5(size, luts, blocks, multipliers, ram_pfus, table_luts, table_kbits):
     return Device(
@@ -142,6 +154,12 @@ DEVICES = {d.name: d for d in (
 #: for: the LFE5U-85F, the largest ECP5.
 DEFAULT_DEVICE = "ecp5-85k"
 
+#: The device ``npstereo report`` checks a Cyclone V synthesis against (the memory check
+#: before synthesis; the explorer takes its ``--device``): the largest Cyclone V E.
+CYCLONEV_DEVICE = "cyclonev-a9"
+
+#: Bits of a TRELLIS_DPR16X4, the ECP5's distributed RAM cell (16 x 4).
+_DPR16X4_BITS = 64
 #: LUT4 sites a TRELLIS_DPR16X4 takes away from logic: slices 0 and 1 of a PFU for the
 #: RAM and slice 2 for its write port (ECP5 data sheet, section 2.2.1).
 _LUTS_PER_DPR16X4 = 6
@@ -161,6 +179,12 @@ def device(name):
         return DEVICES[name]
     except KeyError:
         raise UserError(f"device must be one of {', '.join(DEVICES)}, not {name!r}") from None
+
+
+def target_device(target, part=DEFAULT_DEVICE):
+    """The :class:`Device` a report's result of ``target`` is checked against: ``part``
+    (an ECP5 part's name) for ``ecp5``, :data:`CYCLONEV_DEVICE` for ``cyclonev``."""
+    return device(part if target == "ecp5" else CYCLONEV_DEVICE)
 
 
 def usage(result, dev):
@@ -205,3 +229,18 @@ def fit_message(utilisation):
         return None
     return "does not fit (" + ", ".join(f"{percent:.0f} % {name}"
                                          for percent, name in over) + ")"
+
+
+def memory_fit_message(bits, dev):
+    """``None`` when ``dev`` holds ``bits`` of memory, else ``"does not fit (memory 112 %)"``.
+
+    The bits are the architecture's (:func:`npstereo.hdl.plan_memories.memory_bits`), a
+    lower bound of the RAM its memories take (a block RAM holds its full bits only at its
+    full width and depth; only a memory of a few words may go to flip-flops instead). Just
+    over the capacity the percent has a decimal, rounded up, so that it never reads 100 %.
+    """
+    if bits <= dev.memory_bits:
+        return None
+    percent = 100.0 * bits / dev.memory_bits
+    shown = f"{percent:.0f}" if percent >= 101 else f"{math.ceil(percent * 10) / 10:.1f}"
+    return f"does not fit (memory {shown} %)"

@@ -20,7 +20,7 @@ from ..flow.tools import tool_versions
 
 __all__ = ["source_hash", "golden_source_hash", "verilog_digest", "configuration_digest",
            "design", "memoised_digest", "cache_key", "seed_cache", "earlier_reports",
-           "read_result", "store_result", "incomplete"]
+           "read_result", "store_result", "incomplete", "refused"]
 
 #: The npstereo package's folder (this file is npstereo/gen/reports/cache.py).
 _PACKAGE = Path(__file__).resolve().parents[2]
@@ -136,8 +136,15 @@ def incomplete(result):
     utilisation leaves out the four LUT sites nextpnr packs into every chain
     (:mod:`npstereo.gen.flow.capacity`), so its synthesis is run again, without place and
     route."""
-    return result.get("target") == "ecp5" and "logic" in result and \
+    return result.get("target") == "ecp5" and result.get("logic") is not None and \
         "carry_chains" not in result
+
+
+def refused(result):
+    """Whether ``result`` is a verdict given without synthesis: the device cannot hold the
+    core's memories (:func:`.synthesis.memory_refusal`). It is never stored: giving it
+    again costs nothing, and a stored one would outlive a change of the device table."""
+    return result.get("synthesised") is False
 
 
 def earlier_reports(sweep_json, cache):
@@ -154,6 +161,9 @@ def earlier_reports(sweep_json, cache):
     same_sources = document.get("hdl_sources") == source_hash()
     holding = []
     for report in document.get("reports", []):
+        if "verilog_sha" in report and report["verilog_sha"] is None:
+            continue  # every target refused for its memory: nothing to hold, nothing to
+            # generate the digest of (the Verilog of a core too big for any device)
         params = StereoParams(**report["params"])
         digest = configuration_digest(params, cache)
         if report.get("verilog_sha", digest if same_sources else None) == digest:
@@ -174,7 +184,7 @@ def seed_cache(sweep_json, cache):
         for target, result in report["results"].items():
             # "does not fit" is an answer like "ok": without it a fresh machine would
             # synthesise the largest cores again for an hour to learn what it says.
-            if result.get("status") not in ("ok", "failed", "does not fit"):
+            if result.get("status") not in ("ok", "failed", "does not fit") or refused(result):
                 continue
             if target == "ecp5" and "freq" not in result:
                 continue  # an older result that did not record its nextpnr settings

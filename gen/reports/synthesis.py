@@ -4,19 +4,26 @@ result cache (:mod:`.cache`), with the cycles per frame and the frame rate they 
 :func:`synthesis_report` synthesises what the cache does not hold; :func:`lookup` reads a
 report from the cache alone; :func:`synthesis_job` is a report as a task of a sweep (it
 never raises) and :func:`store_report` files a worker's results in the client's cache.
+
+A target whose device cannot hold the core's memories (:func:`memory_refusal`) is not
+synthesised: its result says "does not fit (memory N %)" at once, from the parameters
+alone. Such a verdict costs nothing to give again and is never cached.
 """
 
 import dataclasses
+import time
 from pathlib import Path
 
 from ...hdl.plan import cycles_per_frame, memory_bits
 from ...hdl.verilog import TOP_NAME, core_verilog
 from ...params import StereoParams
-from ..flow.capacity import DEFAULT_DEVICE, fit_message
+from ..flow.capacity import DEFAULT_DEVICE, fit_message, memory_fit_message, target_device
 from ..flow.synthesise import synthesise
-from .cache import cache_key, design, incomplete, memoised_digest, read_result, store_result
+from .cache import cache_key, design, incomplete, memoised_digest, read_result, refused, \
+    store_result
 
-__all__ = ["synthesis_report", "lookup", "store_report", "failed_report", "synthesis_job"]
+__all__ = ["synthesis_report", "lookup", "store_report", "failed_report", "synthesis_job",
+           "memory_refusal", "refusal_report"]
 
 
 def _path(cache, params, target, pnr, freq, digest, device):
@@ -29,6 +36,43 @@ def _report(params, digest, results):
             "expected_memory_bits": memory_bits(params), "results": results}
 
 
+def memory_refusal(params, target, dev):
+    """The result of ``target`` for ``params`` when ``dev`` (a
+    :class:`~npstereo.gen.flow.capacity.Device`) cannot hold the core's memories, else None.
+
+    Status ``does not fit`` with the message of
+    :func:`~npstereo.gen.flow.capacity.memory_fit_message`, ``memory_bits`` the
+    architecture's, the figures only synthesis gives None, ``device`` the device checked
+    and ``synthesised`` False (:func:`~.cache.refused`). Nothing is generated or
+    synthesised: the bits follow from the parameters.
+    """
+    started = time.monotonic()
+    bits = memory_bits(params)
+    message = memory_fit_message(bits, dev)
+    if message is None:
+        return None
+    unknown = dict.fromkeys(("logic", "logic_unit", "registers", "block_rams",
+                             "block_ram_kind", "lut_rams", "dsps", "ffram_bits",
+                             "logic_levels", "utilisation", "frames_per_second"))
+    return dict(target=target, status="does not fit", message=message, device=dev.name,
+                memory_bits=bits, fmax_mhz=None, fits=False, synthesised=False, **unknown,
+                seconds=round(time.monotonic() - started, 1), cached=False)
+
+
+def refusal_report(params, target, dev):
+    """The report of ``params`` on ``target`` alone when ``dev`` cannot hold its memories
+    (:func:`memory_refusal`; no Verilog digest, nothing was generated), else None."""
+    result = memory_refusal(params, target, dev)
+    return None if result is None else _report(params, None, {target: result})
+
+
+def _refusals(params, targets, device):
+    """:func:`memory_refusal` of each target on the device it is checked against, by
+    target (only the refused ones)."""
+    found = {t: memory_refusal(params, t, target_device(t, device)) for t in targets}
+    return {t: result for t, result in found.items() if result is not None}
+
+
 def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache=None,
                      engine=None, device=DEFAULT_DEVICE):
     """Synthesis figures of one configuration for each target, with cycles and frame rate.
@@ -37,12 +81,20 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
     timeouts are not, so a longer ``--timeout`` retries them. A memory count that differs
     from the architecture's (:func:`~npstereo.hdl.plan.memory_bits`) is noted in the
     result's message. ``device``: the ECP5 part placed on (:mod:`npstereo.gen.flow.capacity`).
+    A target whose device cannot hold the core's memories (the ECP5 part, or
+    :data:`~npstereo.gen.flow.capacity.CYCLONEV_DEVICE`) gets :func:`memory_refusal`'s
+    result before anything is generated; when every target does, no Verilog is generated
+    (``verilog_sha`` None).
     """
-    results = {}
+    results = _refusals(params, targets, device)
+    if len(results) == len(targets):
+        return _report(params, None, {t: results[t] for t in targets})
     cycles = cycles_per_frame(params)
     expected_bits = memory_bits(params)
     digest, verilog = design(params, cache)
     for target in targets:
+        if target in results:
+            continue
         path = None if cache is None else _path(cache, params, target, pnr, freq, digest,
                                                 device)
         cached = None if path is None else read_result(path)
@@ -68,7 +120,7 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
         if path is not None and result["status"] != "timeout":
             store_result(path, result)
         results[target] = dict(result, cached=False)
-    return _report(params, digest, results)
+    return _report(params, digest, {t: results[t] for t in targets})
 
 
 def _completed(cached, verilog, path, timeout, engine, device):
@@ -92,12 +144,15 @@ def lookup(params, targets, pnr=False, freq=150.0, cache=None, device=DEFAULT_DE
            partial=False):
     """The report :func:`synthesis_report` would give, from ``cache`` alone (nothing
     generated or synthesised), or None when any of it is not there. With ``partial``: the
-    targets that are there, or None when none is."""
-    digest = None if cache is None else memoised_digest(params, cache)
-    if digest is None:
-        return None
-    results = {t: read_result(_path(cache, params, t, pnr, freq, digest, device))
-               for t in targets}
+    targets that are there, or None when none is. A target refused for its memory
+    (:func:`memory_refusal`) is always there: its verdict needs no cache."""
+    refusals = _refusals(params, targets, device)
+    rest = [t for t in targets if t not in refusals]
+    digest = None if cache is None or not rest else memoised_digest(params, cache)
+    results = {t: refusals.get(t) or (
+        None if digest is None else read_result(_path(cache, params, t, pnr, freq, digest,
+                                                      device)))
+        for t in targets}
     if partial:
         results = {t: r for t, r in results.items() if r is not None}
         return _report(params, digest, results) if results else None
@@ -113,7 +168,7 @@ def store_report(report, cache, pnr, freq, device=DEFAULT_DEVICE):
         return
     params = StereoParams(**report["params"])
     for target, result in report["results"].items():
-        if result["status"] != "timeout" and not result.get("cached"):
+        if result["status"] != "timeout" and not result.get("cached") and not refused(result):
             store_result(_path(cache, params, target, pnr, freq, report["verilog_sha"],
                                device), result)
 

@@ -1,6 +1,7 @@
 """Text of resource reports: one configuration's table, and the sweep beside the paper."""
 
 from ...params import StereoParams
+from .cache import refused
 from .paper_data import PAPER_BLOCKS, PAPER_CLOCK, PAPER_DID_NOT_FIT, PAPER_LOGIC, \
     PAPER_MEMORY, SAD_TRANSFORMS, is_default_line_buffer
 
@@ -17,6 +18,9 @@ def _synthesised(result):
 
 
 def _row(target, result):
+    if refused(result):  # the verdict before synthesis: only the memory bits are known
+        return [target, "-", "-", "-", "-", f"{result['memory_bits']:,}", "-",
+                result["message"], "-", "0 (not synthesised)"]
     if not _synthesised(result):
         return [target, result["status"], result.get("message", "")]
     utilisation = result.get("utilisation") or {}
@@ -72,9 +76,11 @@ def _lut_notes(report):
 
 
 def _cell(result, key, digits=0):
+    """A figure of ``result``, or why there is none (a result refused for its memory has
+    its memory bits and no other figure)."""
     if result is None:
         return "not run"
-    if not _synthesised(result) or result.get(key) is None:
+    if result.get(key) is None:
         return result["status"] if result["status"] != "ok" else "-"
     return _number(result.get(key), digits)
 
@@ -158,15 +164,20 @@ def sweep_markdown(reports):
     failures = [f"- {_name(r['params'])} {t}: {res['status']}: {res.get('message', '')}"
                 for r in reports for t, res in r["results"].items()
                 if res["status"] not in ("ok", "does not fit")]
+    refusals = [f"- {_name(r['params'])} {t}: {res['message']}" for r in reports
+                for t, res in r["results"].items() if refused(res)]
     paths = [f"- {_name(r['params'])}: {res['critical_path']}{_router_note(res)}" for r in reports
              for res in r["results"].values() if res.get("critical_path")]
     seconds = [f"- {_name(r['params'])} {t}: {res['seconds']:.0f} s"
                + (f" ({res['yosys_time_split']})" if res.get("yosys_time_split") else "")
                for r in reports
-               for t, res in r["results"].items() if "seconds" in res]
+               for t, res in r["results"].items() if "seconds" in res and not refused(res)]
     text = "\n".join(lines) + "\n\n" + "\n".join(clock) + "\n"
     if failures:
         text += "\nFailed or timed out:\n\n" + "\n".join(failures) + "\n"
+    if refusals:
+        text += ("\nNot synthesised (the device cannot hold the memories):\n\n"
+                 + "\n".join(refusals) + "\n")
     if paths:
         text += "\nECP5 critical paths:\n\n" + "\n".join(paths) + "\n"
     return text + "\nSynthesis time per configuration (uncached run):\n\n" + "\n".join(seconds) + "\n"
