@@ -89,7 +89,7 @@ def configurations(grid):
     A value that no combination accepts (block 4, rounds that do not divide D, an
     aggregation window too wide for the frame) is a one-line :class:`ParameterError`; a
     combination of values that others accept, but not together (SGM's default penalties
-    with a transform whose costs are too narrow for them, too few rounds for SGM), is
+    with a transform whose costs are too narrow for them), is
     skipped and named. An
     empty axis, or a grid whose every combination is skipped, is a one-line
     :class:`UserError`.
