@@ -102,10 +102,20 @@ def _pick(m, values, lane, name):
         return _register(m, values[0], width, f"{name}_g0")
     low = (len(lane) + 1) // 2
     size = 1 << low
-    groups = [_register(m, Array(values[k:k + size])[lane[:low]], width, f"{name}_g{k}")
+    groups = [_register(m, Array(_padded(values[k:k + size], size))[lane[:low]], width,
+                        f"{name}_g{k}")
               for k in range(0, len(values), size)]
     high = _register(m, lane[low:], max(1, len(lane) - low), f"{name}_high")
-    return groups[0] if len(groups) == 1 else Array(groups)[high]
+    if len(groups) == 1:
+        return groups[0]
+    return Array(_padded(groups, 1 << len(high)))[high]
+
+
+def _padded(values, count):
+    """``values`` repeated at their last up to ``count``: an index of log2(count) bits then
+    covers every case (a partial case is a lint warning, and its default a latch-like
+    hold in simulation), and the lanes past the last are never selected."""
+    return list(values) + [values[-1]] * (count - len(values))
 
 
 def _argmin(m, values, less, name):
