@@ -38,7 +38,9 @@ from .common import SlotClock, pipe
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
-from .plan import check_buildable, core_timing, latency, masks_after_compare
+from .plan import check_buildable
+from .plan_structure import masks_after_compare
+from .plan_timing import core_timing, latency
 from .stream import PixelPair, disparity_word, framed
 from .stream_parts import InputQueue, RegisterSlice
 from .trees import DEFAULT_EVERY

@@ -1,4 +1,4 @@
-"""What the hardware is generated for, and its facts for the callers outside hdl/.
+"""What the hardware is generated for: the limits, checked before anything is built.
 
 The hardware facts are pure functions of the parameters, in three modules by job:
 :mod:`.plan_structure` (what the components build: register plans, window rows, copies,
@@ -9,21 +9,12 @@ since the components read their plans from there, the numbers cannot drift from 
 build (``tests/test_hdl_plan.py`` also measures them on the elaborated hardware, and
 ``tests/test_report.py`` checks the memories against Yosys).
 
-This module holds the limits the hardware is generated within (:func:`check_buildable`),
-and re-exports the facts that gen/, sim/, the core's top level and its tests import from
-here.
+This module holds the limits the hardware is generated within (:func:`check_buildable`);
+callers import each fact from the module that defines it.
 """
 
 from ..params import ParameterError
-# issue 26: re-exported for gen/, sim/, hdl/core.py, hdl/verilog.py and tests/ until they
-# import from the modules that define them.
-from .plan_memories import memories, memory_bits
-from .plan_structure import bank_choice_levels, cost_plan, masks_after_compare, output_width
-from .plan_timing import core_timing, cycles_per_frame, latency
-
-__all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable", "output_width",
-           "latency", "cycles_per_frame", "core_timing", "memories", "memory_bits",
-           "masks_after_compare", "bank_choice_levels", "cost_plan"]
+__all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable"]
 
 
 #: Widest frame the hardware is generated for. 8192 covers 8K video (7680); the line

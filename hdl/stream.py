@@ -14,7 +14,7 @@ import numpy as np
 from amaranth.hdl import unsigned
 from amaranth.lib import data
 
-from .plan import output_width
+from .plan_structure import output_width
 
 __all__ = ["PixelPair", "disparity_word", "framed", "WordCodec"]
 
@@ -27,7 +27,7 @@ class PixelPair(data.Struct):
 
 def disparity_word(params):
     """One output word: the disparity (0 where invalid) from bit 0, the valid flag in the
-    top bit of :func:`~.plan.output_width` (whole bytes, as video IP expects); the bits
+    top bit of :func:`~.plan_structure.output_width` (whole bytes, as video IP expects); the bits
     between are 0."""
     size = output_width(params)
     return data.FlexibleLayout(size, {

@@ -15,7 +15,8 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .core import NpStereoCore
-from .plan import latency, output_width
+from .plan_structure import output_width
+from .plan_timing import latency
 
 __all__ = ["TOP_NAME", "AxiTop", "core_verilog", "header"]
 

@@ -10,7 +10,8 @@ import time
 
 from npstereo.gen.flow.synthesise import synthesise
 from npstereo.gen.flow.tools import TARGETS
-from npstereo.hdl.plan import cycles_per_frame, memory_bits
+from npstereo.hdl.plan_memories import memory_bits
+from npstereo.hdl.plan_timing import cycles_per_frame
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import TRANSFORMS, StereoParams
 

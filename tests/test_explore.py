@@ -33,7 +33,7 @@ from npstereo.gen.explore.explorer import Grid, configurations, explore, pareto_
     recommend
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
-from npstereo.hdl import plan
+from npstereo.hdl import plan_memories, plan_timing
 from npstereo.params import ParameterError, StereoParams, UserError
 
 WIDTH, HEIGHT, DISPARITIES = 32, 8, 8
@@ -100,11 +100,11 @@ def test_small_grid_synthesis_fit_and_ranking(first_run):
     for params, point in zip(_grid_params(), document["points"]):
         result = point["synthesis"]
         assert result["status"] == "ok", result
-        assert result["memory_bits"] == point["memory_bits"] == plan.memory_bits(params)
+        assert result["memory_bits"] == point["memory_bits"] == plan_memories.memory_bits(params)
         assert point["logic"] == result["logic"] + result["lut_rams"] > 0
         assert point["utilisation"] == utilisation(result, dev)
         assert point["fits"] is True and point["verdict"] == "fits"
-        assert point["cycles_per_frame"] == plan.cycles_per_frame(params)
+        assert point["cycles_per_frame"] == plan_timing.cycles_per_frame(params)
         # No place and route: frames/s at the assumed 100 MHz.
         assert point["frames_per_second"] == pytest.approx(100e6 / point["cycles_per_frame"])
     points = document["points"]

@@ -15,9 +15,9 @@ import pytest
 from amaranth.hdl import Value
 from amaranth.lib import memory
 
-from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan, plan_structure
-from npstereo.hdl import trees, window_centre
-from npstereo.hdl import core as core_module
+from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan_structure
+from npstereo.hdl import plan_structure, trees, window_centre
+from npstereo.hdl import core as core_module, plan_structure
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
 
@@ -90,7 +90,7 @@ def test_cost_bank_choice_in_levels(monkeypatch):
     monkeypatch.setattr(plan_structure, "COST_BANK", 2)
     params = StereoParams(transform="ext-census", block=3, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7, line_buffer="costs")
-    assert plan.bank_choice_levels(params) == 3
+    assert plan_structure.bank_choice_levels(params) == 3
     pairs = [stereo_pair("layers", 7, 20, 9), stereo_pair("independent", 7, 20, 10)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                  valid_prob=GAPS, ready_prob=GAPS, seed=4)
@@ -117,7 +117,7 @@ def test_spaced_popcount(monkeypatch):
     monkeypatch.setattr(plan_structure, "SPACED_POPCOUNT_ABOVE", 8)
     params = StereoParams(transform="census", block=5, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7)
-    assert not all(plan.cost_plan(params))
+    assert not all(plan_structure.cost_plan(params))
     pairs = [stereo_pair("layers", 7, 20, 13), stereo_pair("independent", 7, 20, 14)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                  valid_prob=GAPS, ready_prob=GAPS, seed=5)
@@ -129,7 +129,7 @@ def test_popcount_spacing_by_block():
     def spaced(block):
         params = StereoParams(transform="census", block=block, disparities=100, rounds=10,
                               width=450, height=375)
-        return not all(plan.cost_plan(params))
+        return not all(plan_structure.cost_plan(params))
     assert [spaced(block) for block in (7, 9, 11, 13, 15, 17, 19)] == [False] * 5 + [True] * 2
 
 
@@ -139,7 +139,7 @@ def test_spaced_sum_of_differences(monkeypatch):
     monkeypatch.setattr(plan_structure, "SPACED_SAD_ABOVE", 4)
     params = StereoParams(transform="ext-census", block=3, disparities=8, rounds=2,
                           lr_threshold=1, width=20, height=7)
-    assert plan.cost_plan(params)[:3] == [False, False, True]
+    assert plan_structure.cost_plan(params)[:3] == [False, False, True]
     pairs = [stereo_pair("layers", 7, 20, 17), stereo_pair("independent", 7, 20, 18)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                  valid_prob=GAPS, ready_prob=GAPS, seed=7)
@@ -151,7 +151,7 @@ def test_sum_of_differences_spacing_by_block():
     for block in (7, 9, 11, 13, 15, 17, 19):
         params = StereoParams(transform="ext-census", block=block, disparities=100,
                               rounds=10, width=450, height=375)
-        cost = plan.cost_plan(params)
+        cost = plan_structure.cost_plan(params)
         assert cost[:3] == ([False, True, False] if block <= 11 else [False, False, True])
         assert sum(cost) == sum(trees.sad_plan(params.neighbours, 2, 0, True))
 

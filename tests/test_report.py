@@ -2,7 +2,7 @@
 
 The memory-bit count is checked on a design of our own whose memory size is known exactly
 (a line buffer in an Amaranth ``Memory``; a buffer one line shorter must count fewer
-bits), and the architecture's formula (:func:`npstereo.hdl.plan.memory_bits`) against
+bits), and the architecture's formula (:func:`npstereo.hdl.plan_memories.memory_bits`) against
 what Yosys finds in generated cores of several shapes.
 """
 
@@ -26,7 +26,7 @@ from npstereo.gen.reports import cache as report_cache, synthesis
 from npstereo.gen.reports.paper_data import paper_configurations, sweep_targets
 from npstereo.gen.reports.plots import sweep_plots
 from npstereo.gen.reports.tables import format_table, sweep_markdown
-from npstereo.hdl import plan, plan_memories
+from npstereo.hdl import plan_memories, plan_timing
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import StereoParams
 
@@ -105,11 +105,11 @@ def test_small_core_report_and_cache(tmp_path):
     first = synthesis.synthesis_report(params, ["cyclonev"], cache=tmp_path)
     result = first["results"]["cyclonev"]
     assert result["status"] == "ok", result
-    assert result["memory_bits"] == first["expected_memory_bits"] == plan.memory_bits(params)
+    assert result["memory_bits"] == first["expected_memory_bits"] == plan_memories.memory_bits(params)
     assert result["memory_bits"] != _wrong_memory_bits(params)
     assert result["message"] == ""
     assert result["logic"] > 0 and result["registers"] > 0 and result["ffram_bits"] == 0
-    assert first["cycles_per_frame"] == plan.cycles_per_frame(params)
+    assert first["cycles_per_frame"] == plan_timing.cycles_per_frame(params)
     again = synthesis.synthesis_report(params, ["cyclonev"], cache=tmp_path)
     assert again["results"]["cyclonev"]["cached"] is True
     assert again["results"]["cyclonev"]["logic"] == result["logic"]
@@ -140,7 +140,7 @@ def _wrong_memory_bits(params):
     rows = plan_memories.window_rows
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(plan_memories, "window_rows", lambda p: rows(p) + 1)
-        return plan.memory_bits(params)
+        return plan_memories.memory_bits(params)
 
 
 @pytest.mark.parametrize("params", MEMORY_SHAPES, ids=lambda p: p.describe().replace(" ", "_"))
@@ -149,7 +149,7 @@ def test_memory_formula_matches_yosys(params):
     with one row too many per buffer is not."""
     result = synthesise(core_verilog(params), "cyclonev", TOP_NAME)
     assert result["status"] == "ok", result
-    assert result["memory_bits"] == plan.memory_bits(params)
+    assert result["memory_bits"] == plan_memories.memory_bits(params)
     assert result["memory_bits"] != _wrong_memory_bits(params)
 
 
@@ -290,7 +290,7 @@ def test_cli_single_configuration(tmp_path, capsys):
     result = document["reports"][0]["results"]["cyclonev"]
     params = StereoParams(transform="rank", block=3, disparities=4, rounds=2, aggregation=1,
                           lr_threshold=None, width=16, height=4)
-    assert result["memory_bits"] == plan.memory_bits(params)
+    assert result["memory_bits"] == plan_memories.memory_bits(params)
 
 
 def test_sweep_outputs_ratios_and_plots(tmp_path):
@@ -485,7 +485,7 @@ def test_sweep_on_dask_gives_the_numbers_of_one_process(tmp_path):
         result = report["results"]["cyclonev"]
         assert result["status"] == "ok" and result["cached"] is False
         assert {k: result.get(k) for k in FIGURES} == {k: direct.get(k) for k in FIGURES}
-        assert result["memory_bits"] == plan.memory_bits(params)
+        assert result["memory_bits"] == plan_memories.memory_bits(params)
     again = cmd_report.run_sweep(configurations, ("cyclonev",), False, 150.0, None, cache,
                                  client=None)
     assert all(r["results"]["cyclonev"]["cached"] for r in again)

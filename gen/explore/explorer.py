@@ -8,7 +8,7 @@ For each configuration of the grid it measures
 - logic, registers, memory bits, block RAMs and the logic depth from synthesis for the
   device's target, and with place and route (ECP5 parts) nextpnr's Fmax;
 - frames per second at the hardware's frame size: Fmax (or the assumed clock without
-  place and route) over :func:`~npstereo.hdl.plan.cycles_per_frame`;
+  place and route) over :func:`~npstereo.hdl.plan_timing.cycles_per_frame`;
 
 and says whether it fits the device (:mod:`npstereo.gen.flow.capacity`); a configuration
 whose memories the device cannot hold is told "does not fit (memory N %)" without a
@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from ...golden.quality import evaluate as quality_of
-from ...hdl.plan import check_buildable, cycles_per_frame
+from ...hdl.plan import check_buildable
+from ...hdl.plan_timing import cycles_per_frame
 from ...params import ParameterError, StereoParams, UserError
 from ..atomic import OutputError
 from ..flow.capacity import DEFAULT_DEVICE, device as find_device, fit_message, usage, \

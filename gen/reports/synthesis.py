@@ -14,7 +14,8 @@ import dataclasses
 import time
 from pathlib import Path
 
-from ...hdl.plan import cycles_per_frame, memory_bits
+from ...hdl.plan_memories import memory_bits
+from ...hdl.plan_timing import cycles_per_frame
 from ...hdl.verilog import TOP_NAME, core_verilog
 from ...params import StereoParams
 from ..flow.capacity import DEFAULT_DEVICE, fit_message, memory_fit_message, target_device
@@ -79,7 +80,7 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
 
     Results that are ``ok`` or ``failed`` are cached in ``cache`` (a folder) when given;
     timeouts are not, so a longer ``--timeout`` retries them. A memory count that differs
-    from the architecture's (:func:`~npstereo.hdl.plan.memory_bits`) is noted in the
+    from the architecture's (:func:`~npstereo.hdl.plan_memories.memory_bits`) is noted in the
     result's message. ``device``: the ECP5 part placed on (:mod:`npstereo.gen.flow.capacity`).
     A target whose device cannot hold the core's memories (the ECP5 part, or
     :data:`~npstereo.gen.flow.capacity.CYCLONEV_DEVICE`) gets :func:`memory_refusal`'s
