@@ -220,7 +220,7 @@ def main(argv=None):
         maps = opencv_maps(cv2, matcher, left, right, disparities, num_disparities)
         add("peer", name, maps, time.perf_counter() - start)
 
-    print(f"\n| method | L/R check | correct (%) | density (%) | error rate (%) | seconds |")
+    print("\n| method | L/R check | correct (%) | density (%) | error rate (%) | seconds |")
     print("|---|---|---:|---:|---:|---:|")
     for row in rows:
         print(f"| {row['method']} | {row['lr_check']} | {row['correct']:.2f} | "

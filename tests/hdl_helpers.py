@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 import pytest
 from amaranth.hdl import Fragment, Module, ResetInserter, Signal, UnusedElaboratable
+from amaranth.lib import memory
 from amaranth.sim import Simulator
 
 from npstereo.golden.lr_check import INVALID
@@ -182,3 +183,18 @@ def refused_quietly(make, error, match):
         gc.collect()
     unused = [str(w.message) for w in caught if issubclass(w.category, UnusedElaboratable)]
     assert not unused, f"left behind: {unused}"
+
+
+def record_memories(monkeypatch):
+    """Every Amaranth ``Memory`` made from now on, in a list that fills as designs are
+    built (tests fill them with random words: nothing may rely on what a memory holds
+    before it is written)."""
+    made = []
+    create = memory.Memory.__init__
+
+    def recording(self, *args, **kwargs):
+        create(self, *args, **kwargs)
+        made.append(self)
+
+    monkeypatch.setattr(memory.Memory, "__init__", recording)
+    return made

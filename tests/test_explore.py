@@ -23,7 +23,7 @@ import pytest
 from distributed import Client
 from PIL import Image
 
-from npstereo.gen.cli.cmd_explore import conditions, load_scenes, write_outputs
+from npstereo.gen.cli.cmd_explore import conditions, load_scenes
 from npstereo.gen.cli.main import main
 from npstereo.gen.explore import engine
 from npstereo.gen.flow.capacity import DEVICES, fit_message, utilisation

@@ -13,15 +13,14 @@ import dataclasses
 import numpy as np
 import pytest
 from amaranth.hdl import Value
-from amaranth.lib import memory
 
-from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan_structure
-from npstereo.hdl import plan_structure, trees, window_centre
-from npstereo.hdl import core as core_module, plan_structure
+from npstereo.hdl import core as core_module
+from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan_structure, trees, \
+    window_centre
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
 
-from hdl_helpers import RESET, check_frames, frame_beats, refused_quietly
+from hdl_helpers import RESET, check_frames, frame_beats, record_memories, refused_quietly
 from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
@@ -194,14 +193,7 @@ def test_stale_memory_contents_never_reach_a_result(monkeypatch):
     """Every memory of the core starts full of random words (no reset or power-up value
     is relied on: synthesis for Cyclone V drops the initial contents), and a frame comes
     out exact: every stage masks by its tags, never by what its memories held."""
-    made = []
-    create = memory.Memory.__init__
-
-    def recording(self, *args, **kwargs):
-        create(self, *args, **kwargs)
-        made.append(self)
-
-    monkeypatch.setattr(memory.Memory, "__init__", recording)
+    made = record_memories(monkeypatch)
     rng = np.random.default_rng(5)
     for line_buffer, lr in (("transforms", 1), ("costs", 0), ("pixels", 1)):
         made.clear()

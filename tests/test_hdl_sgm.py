@@ -7,7 +7,7 @@ S(x, y, d) of the frame is compared with ``golden.sgm.aggregate``; R = 1 (D lane
 one clock), R = 2, R >= 3 (the two-clock lane update), R = D and odd splits, rows longer than
 K so that the tracked reference comes from the history, constant and adaptive P2, P1 = P2 = 0
 and P2 at its largest.
-The core: whole frames through :class:`NpStereoCore` in Amaranth's simulator against
+The core: whole frames through :class:`~npstereo.hdl.core.NpStereoCore` in Amaranth's simulator against
 ``golden.pipeline.disparity_map`` (which dispatches to golden.sgm), all four transforms,
 random source gaps and sink backpressure, frames back to back, a reset in mid-frame,
 mis-framed input. ``test_broken_*`` monkeypatch a wrong rule into the hardware and prove
@@ -19,18 +19,16 @@ import random
 import numpy as np
 import pytest
 from amaranth.hdl import Value
-from amaranth.lib import memory
 from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
 from npstereo.hdl import calculation_stage, plan, plan_memories, plan_timing
 from npstereo.hdl import sgm as hdl_sgm
 from npstereo.hdl import sgm_left
-from npstereo.hdl.core import NpStereoCore
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
 from npstereo.params import ParameterError, StereoParams
 
-from hdl_helpers import RESET, check_frames, frame_beats
+from hdl_helpers import RESET, check_frames, frame_beats, record_memories
 from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
@@ -47,14 +45,7 @@ def sgm_params(transform, block, disparities, rounds, p1=None, p2=None, adapt=No
 def random_memories(monkeypatch, seed):
     """Record every Memory made from now on; returns a function filling them with random
     words (nothing may rely on what a memory holds before it is written)."""
-    made = []
-    create = memory.Memory.__init__
-
-    def recording(self, *args, **kwargs):
-        create(self, *args, **kwargs)
-        made.append(self)
-
-    monkeypatch.setattr(memory.Memory, "__init__", recording)
+    made = record_memories(monkeypatch)
     rng = random.Random(seed)
 
     def fill(ctx):
