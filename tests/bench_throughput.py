@@ -10,21 +10,9 @@ and unused. Place and route is single-threaded and takes tens of minutes at this
 import argparse
 import time
 
+from npstereo.gen.reports.camera import PEERS, evaluations_per_second as evaluations
 from npstereo.gen.reports.synthesis import synthesis_report
 from npstereo.params import SGM, StereoParams
-
-#: Published peers: (design, W, H, D, frames/s); evaluations/s = W H D fps. Vitis at
-#: 200 MHz evaluates 16 disparities per clock: 24.1 frames/s at 1080p, D = 64.
-PEERS = (
-    ("Vitis Vision SemiGlobalBM (200 MHz)", 1920, 1080, 64, 24.1),
-    ("FP-Stereo", 1242, 374, 64, 161),
-    ("Wang et al. 2015 (AD-census + SGM)", 1600, 1200, 128, 42),
-    ("Grabowski & Kryjak 2023 (4 pixels per clock)", 3840, 2160, 64, 30),
-)
-
-
-def evaluations(width, height, disparities, fps):
-    return width * height * disparities * fps
 
 
 def main():

@@ -2,7 +2,9 @@
 
 One configuration (``--transform ... --width ... --height ...``) prints a table per target;
 ``--paper`` runs the paper's sweep (four transforms x blocks 7..19 at 450 x 375, D = 100,
-R = 10) and writes markdown, JSON and PNG plots. The sweep's configurations are tasks on
+R = 10) and writes markdown, JSON and PNG plots; ``--camera`` the camera-rate
+configurations (:mod:`npstereo.gen.reports.camera`), markdown and JSON. A sweep's
+configurations are tasks on
 Dask distributed (:mod:`npstereo.gen.explore.engine`: an embedded LocalCluster, or
 ``--scheduler``). Results are cached by configuration, generated Verilog and tool versions
 (:mod:`npstereo.gen.reports.cache`), so a rerun only synthesises what changed.
@@ -22,11 +24,13 @@ from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster,
 from ..flow.capacity import DEFAULT_DEVICE
 from ..flow.tools import ENGINES, TARGETS, tool_versions
 from ..reports.cache import earlier_reports, seed_cache, source_hash
+from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
+    camera_configurations
 from ..reports.paper_data import PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_ROUNDS, PAPER_SIZE, \
     is_default_line_buffer, paper_configurations, sweep_targets
 from ..reports.plots import sweep_plots
 from ..reports.synthesis import failed_report, lookup, store_report, synthesis_job
-from ..reports.tables import format_table, sweep_markdown
+from ..reports.tables import camera_markdown, format_table, sweep_markdown
 from .arguments import DEFAULT_CACHE, add_engine_arguments, add_hardware_arguments, \
     add_matching_arguments, check_output_file, check_output_folder, params_from_args
 
@@ -37,8 +41,9 @@ DESCRIPTION = ("Synthesise generated cores with Yosys (Cyclone V, ECP5) and next
 
 
 def _order(params):
-    return (params["transform"], params["block"], params.get("line_buffer", "auto"),
-            params.get("lut_inputs", 4))
+    """A configuration's identity (a document's older reports may lack newer fields, which
+    take their defaults)."""
+    return repr(StereoParams(**params))
 
 
 def _status_line(report):
@@ -150,12 +155,19 @@ def _in_order(reports, configurations):
     return sorted(reports, key=lambda r: order[_order(r["params"])])
 
 
-def _write_sweep(reports, out):
+#: What each sweep is called in its folder, and how its markdown is written (the paper's
+#: sweep also draws its plots).
+SWEEPS = {"paper": ("sweep", sweep_markdown), "camera": ("camera", camera_markdown)}
+
+
+def _write_sweep(reports, out, sweep="paper"):
     """Write the sweep's JSON, markdown and plots (after every configuration)."""
+    name, markdown = SWEEPS[sweep]
     document = {"tools": tool_versions(), "hdl_sources": source_hash(), "reports": reports}
-    write_text(out / "sweep.json", json.dumps(document, indent=1) + "\n")
-    write_text(out / "sweep.md", sweep_markdown(reports))
-    return [out / "sweep.json", out / "sweep.md"] + sweep_plots(reports, out)
+    write_text(out / f"{name}.json", json.dumps(document, indent=1) + "\n")
+    write_text(out / f"{name}.md", markdown(reports))
+    written = [out / f"{name}.json", out / f"{name}.md"]
+    return written + (sweep_plots(reports, out) if sweep == "paper" else [])
 
 
 def add_arguments(parser):
@@ -179,9 +191,14 @@ def add_arguments(parser):
                         help=f"the paper's sweep: {len(TRANSFORMS)} transforms x blocks "
                              f"{PAPER_BLOCKS[0]}..{PAPER_BLOCKS[-1]}, {width}x{height}, "
                              f"D={PAPER_DISPARITIES}, R={PAPER_ROUNDS}")
+    sizes = ", ".join(f"{w}x{h} D={'/'.join(map(str, d))}" for w, h, d in CAMERA_FORMATS)
+    blocks = "/".join(f"{b}x{b}" for _, b in CAMERA_TRANSFORMS)
+    parser.add_argument("--camera", action="store_true",
+                        help=f"the camera-rate sweep: census {blocks}, box and SGM, at "
+                             f"{sizes}, R={'/'.join(map(str, CAMERA_ROUNDS))}")
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("docs/resources"),
-                        help="output folder of --paper (default docs/resources)")
+                        help="output folder of --paper and --camera (default docs/resources)")
     parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
                         help="result cache folder")
     parser.add_argument("--no-cache", action="store_true", help="synthesise everything again")
@@ -191,11 +208,19 @@ def add_arguments(parser):
     parser.set_defaults(run=run)
 
 
+def _sweep(args):
+    """Which sweep the arguments ask for: "paper", "camera" or None (one configuration)."""
+    if args.paper and args.camera:
+        raise UserError("--paper and --camera are two sweeps: choose one")
+    return "paper" if args.paper else "camera" if args.camera else None
+
+
 def _check(args):
     check_engine_arguments(args.workers, args.scheduler)
-    if not args.paper and (args.scheduler is not None or args.workers is not None):
-        raise UserError("--scheduler and --workers are for --paper: one configuration "
-                        "is synthesised here")
+    sweep = _sweep(args)
+    if sweep is None and (args.scheduler is not None or args.workers is not None):
+        raise UserError("--scheduler and --workers are for --paper or --camera: one "
+                        "configuration is synthesised here")
     if not (args.timeout > 0 and math.isfinite(args.timeout)):
         raise UserError(f"--timeout must be a positive number of seconds, not {args.timeout:g}")
     if not (args.freq > 0 and math.isfinite(args.freq)):
@@ -210,7 +235,9 @@ def _check(args):
         width, height = PAPER_SIZE
         raise UserError(f"--paper uses the paper's {width}x{height} frames: drop "
                         "--width/--height")
-    if args.paper:
+    if args.camera and (args.width is not None or args.height is not None):
+        raise UserError("--camera uses the camera formats' frames: drop --width/--height")
+    if sweep is not None:
         check_output_folder(args.out)
 
 
@@ -218,34 +245,36 @@ def run(args):
     _check(args)
     targets = TARGETS if args.target == "all" else (args.target,)
     cache = None if args.no_cache else args.cache
-    if args.paper:
-        configurations = paper_configurations()
+    sweep = _sweep(args)
+    if sweep is not None:
+        configurations = paper_configurations() if args.paper else camera_configurations()
+        document_path = args.out / f"{SWEEPS[sweep][0]}.json"
         earlier = {}
         if cache is not None:
-            seeded = seed_cache(args.out / "sweep.json", cache)
+            seeded = seed_cache(document_path, cache)
             if seeded:
-                print(f"resuming: {seeded} results taken from {args.out / 'sweep.json'}",
+                print(f"resuming: {seeded} results taken from {document_path}",
                       file=sys.stderr)
             earlier = {repr(p): report for p, _, report
-                       in earlier_reports(args.out / "sweep.json", cache)}
+                       in earlier_reports(document_path, cache)}
     else:
         if args.width is None or args.height is None:
-            raise UserError("--width and --height are required (or use --paper)")
+            raise UserError("--width and --height are required (or use --paper or --camera)")
         configurations = [params_from_args(args).with_size(args.width, args.height)]
         check_buildable(configurations[0])
-    if args.paper:
+    if sweep is not None:
         with cluster(args.scheduler, args.workers) as client:
             reports = run_sweep(configurations, targets, args.pnr, args.freq, args.timeout,
                                 cache, client, engine=args.yosys,
-                                progress=lambda done: _write_sweep(done, args.out),
+                                progress=lambda done: _write_sweep(done, args.out, sweep),
                                 earlier=earlier)
     else:
         reports = [synthesis_job(configurations[0], targets, args.pnr, args.freq,
                                  args.timeout, cache, args.yosys)]
         print(f"{configurations[0].describe()}: {_status_line(reports[0])}", file=sys.stderr)
     document = {"tools": tool_versions(), "reports": reports}
-    if args.paper:
-        for path in _write_sweep(reports, args.out):
+    if sweep is not None:
+        for path in _write_sweep(reports, args.out, sweep):
             print(f"wrote {path}")
     else:
         print(format_table(reports[0]))
@@ -254,4 +283,4 @@ def run(args):
     # A core too big for the device is an answer, not a failure of the tool.
     failed = [r for report in reports for r in report["results"].values()
               if r["status"] not in ("ok", "does not fit")]
-    return 1 if failed and not args.paper else 0
+    return 1 if failed and sweep is None else 0

@@ -1,11 +1,13 @@
-"""Text of resource reports: one configuration's table, and the sweep beside the paper."""
+"""Text of resource reports: one configuration's table, the sweep beside the paper, and the
+camera-rate configurations beside the published peers."""
 
 from ...params import StereoParams
 from .cache import refused
+from .camera import PEERS, evaluations_per_second
 from .paper_data import PAPER_BLOCKS, PAPER_CLOCK, PAPER_DID_NOT_FIT, PAPER_LOGIC, \
     PAPER_MEMORY, SAD_TRANSFORMS, is_default_line_buffer
 
-__all__ = ["format_table", "sweep_markdown"]
+__all__ = ["format_table", "sweep_markdown", "camera_markdown"]
 
 
 def _number(value, digits=0):
@@ -192,3 +194,40 @@ def _router_note(result):
                      "reach the clock network")
     notes = [note for note in notes if note]
     return f" ({'; '.join(notes)})" if notes else ""
+
+
+def camera_markdown(reports):
+    """The camera table: one row per configuration (ECP5 and Cyclone V columns), then the
+    peers, then what did not fit or failed."""
+    lines = ["| matcher | frame | D | R | ECP5 LUT4 | LUT sites % | FF | DP16KD | Fmax MHz "
+             "| frames/s | G evaluations/s | Cyclone V ALUTs | M10K |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    notes = []
+    for report in reports:
+        p = StereoParams(**report["params"])
+        e5, cv = report["results"].get("ecp5"), report["results"].get("cyclonev")
+        fmax, fps = _clock(e5)
+        rate = "-"
+        if e5 is not None and e5.get("frames_per_second"):
+            rate = _number(evaluations_per_second(p.width, p.height, p.disparities,
+                                                  e5["frames_per_second"]) / 1e9, 2)
+        lut = (e5 or {}).get("utilisation") or {}
+        matcher = f"{p.transform} {p.block}x{p.block} " + ("SGM" if p.is_sgm else
+                                                            f"{p.aggregation}x{p.aggregation} box")
+        lines.append("| " + " | ".join([
+            matcher, f"{p.width}x{p.height}", str(p.disparities), str(p.rounds),
+            _cell(e5, "logic"), _number(lut.get("LUT")) if lut else "-",
+            _cell(e5, "registers"), _cell(e5, "block_rams"), fmax, fps, rate,
+            _cell(cv, "logic"), _cell(cv, "block_rams")]) + " |")
+        for target, result in report["results"].items():
+            if refused(result) or result["status"] not in ("ok",):
+                notes.append(f"- {p.describe()} {target}: {result['status']}: "
+                             f"{result.get('message', '')}")
+    peers = ["| design | frame | D | frames/s | G evaluations/s |", "|---|---|---:|---:|---:|"]
+    peers += [f"| {name} | {w}x{h} | {d} | {fps:.0f} | "
+              f"{evaluations_per_second(w, h, d, fps) / 1e9:.1f} |"
+              for name, w, h, d, fps in PEERS]
+    text = "\n".join(lines) + "\n\nPublished peers:\n\n" + "\n".join(peers) + "\n"
+    if notes:
+        text += "\nNot fitting, failed or not run to the end:\n\n" + "\n".join(notes) + "\n"
+    return text
