@@ -190,8 +190,13 @@ class Transform(wiring.Component):
         Register spacing in levels of logic; 0 for a combinational transform.
     """
 
-    def __init__(self, params, every=DEFAULT_EVERY, copies=1, mask_after=False):
+    def __new__(cls, params, every=DEFAULT_EVERY, copies=1, mask_after=False):
+        # Refused before the object exists (a component that raises in __init__ is
+        # garbage Amaranth reports as created but never used), as the core does.
         _check_mask_after(params, mask_after)
+        return super().__new__(cls, src_loc_at=1)
+
+    def __init__(self, params, every=DEFAULT_EVERY, copies=1, mask_after=False):
         self.params = params
         self.impl = _TRANSFORMS[params.transform](params, every, copies, mask_after)
         self.latency = self.impl.latency
