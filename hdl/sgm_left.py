@@ -275,13 +275,21 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
     t, steps = owner.timing, SGM_TRACK_STEPS
     bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
     at = t.loop - 2
+    # Which entries exist and where they are, from the column a clock ahead (a slot-aligned
+    # value holds for the slot's R clocks, so the registers hold this position's): the
+    # subtractions and comparisons in front of the files' multiplexers and the additions
+    # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5).
+    x = column(at - 1)
+    terms = [Mux(_register(m, x > k, 1, f"sgm_left_has{k}"),
+                 Array(entries)[_register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
+             for k, entries in enumerate(sums, 1)]
+    terms.append(owner._aligned(p2, t.guide, at, "sgm_left_p2"))
+    while len(terms) > 1:   # a tree of additions, not a chain
+        terms = [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
+    total = _register(m, terms[0][:bits], bits, "sgm_left_csum")
     x = column(at)
-    total = owner._aligned(p2, t.guide, at, "sgm_left_p2")
-    for k, entries in enumerate(sums, 1):
-        total = total + Mux(x > k, Array(entries)[(x - k)[:index]], 0)
-    total = _register(m, total[:bits], bits, "sgm_left_csum")
-    x = column(at + 1)
-    start = Mux(x <= steps, m0, Array(chosen)[x[:index]])
+    near = _register(m, x <= steps, 1, "sgm_left_near")
+    start = Mux(near, m0, Array(chosen)[_register(m, x[:index], index, "sgm_left_chosen_at")])
     return (start + total)[:bits]
 
 
@@ -294,8 +302,14 @@ def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
     lane_bits = bits_for(p.per_round - 1)
     index = steps.bit_length() - 1
     for k, at in enumerate(t.left_picks, 1):
-        x = column(at)
-        wanted = Mux(x + k <= age, b0, Array(history)[(x + k)[:age.bit_length() - 1]])
+        # The comparison and the history's address from the column a clock ahead: in
+        # front of the history's multiplexer they were census 7x7 SGM's critical path
+        # (13.5 ns, ECP5).
+        x = column(at - 1)
+        near = _register(m, x + k <= age, 1, f"sgm_left_young{k}")
+        entry = _register(m, (x + k)[:age.bit_length() - 1], age.bit_length() - 1,
+                          f"sgm_left_history_at{k}")
+        wanted = Mux(near, b0, Array(history)[entry])
         b = _register(m, wanted, len(b0), f"sgm_left_b{k}", slots.first(at))
         lane, round_ = b[:lane_bits], b[lane_bits:]
         if k < steps:
