@@ -53,6 +53,26 @@ def tag_layout(params):
     })
 
 
+def register(m, value, shape, name, enable=None):
+    """``value`` in a register of ``shape`` without reset (a datapath register, see
+    :func:`pipe`), loaded every clock or while ``enable`` is high."""
+    reg = Signal(shape, name=name, reset_less=True)
+    if enable is None:
+        m.d.sync += reg.eq(value)
+    else:
+        with m.If(enable):
+            m.d.sync += reg.eq(value)
+    return reg
+
+
+def taps(m, value, depth, name):
+    """``value`` and free-running copies of it 1 .. ``depth`` clocks late (taps[k])."""
+    copies = [value]
+    for k in range(depth):
+        copies.append(register(m, copies[-1], value.shape(), f"{name}_d{k + 1}"))
+    return copies
+
+
 def pipe(m, value, steps, name, reset=False):
     """``value`` delayed by ``steps`` clocks: a free-running shift register.
 

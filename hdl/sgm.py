@@ -41,7 +41,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
-from .common import SlotClock, Store, absolute_difference, bits_for, tag_layout
+from .common import SlotClock, Store, absolute_difference, bits_for, register, tag_layout, taps
 from .plan_timing import sgm_timing
 from .sgm_left import left_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
@@ -99,26 +99,9 @@ def _normalised(best, minimum, bound, p2, fresh):
     return Mux(fresh, 0, Mux(best <= bound, best - minimum, p2))
 
 
-def _taps(m, value, depth, name):
-    """``value`` and free-running copies of it 1 .. ``depth`` clocks late (taps[k])."""
-    taps = [value]
-    for k in range(depth):
-        reg = Signal(value.shape(), name=f"{name}_d{k + 1}", reset_less=True)
-        m.d.sync += reg.eq(taps[-1])
-        taps.append(reg)
-    return taps
-
-
 def _lanes(word, count, bits):
     """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
     return [word[i * bits:(i + 1) * bits] for i in range(count)]
-
-
-def _register(m, value, shape, name):
-    """``value`` in a free-running register of ``shape``."""
-    reg = Signal(shape, name=name, reset_less=True)
-    m.d.sync += reg.eq(value)
-    return reg
 
 
 class SemiGlobalAggregation(wiring.Component):
@@ -179,22 +162,22 @@ class SemiGlobalAggregation(wiring.Component):
         costs = Cat(*(self.costs[i] for i in range(units)))
         #: The round's costs C, k clocks late at index k.
         self._costs = [_lanes(word, units, p.cost_bits) for word in
-                       _taps(m, costs, max(t.rows - 1, t.loop + t.left_stages - 1,
+                       taps(m, costs, max(t.rows - 1, t.loop + t.left_stages - 1,
                                            t.left_picks[-2] + 1), "sgm_cost")]
         # Fresh starts of the position, slot-aligned with P2 (two registers after the tag).
         fresh = {}
         for path in SGM_PATHS:
             name = f"sgm_fresh_{path.replace('-', '_')}"
-            flag = _register(m, _fresh(path, self.tag.x, self.tag.y, p.width), 1, name)
-            fresh[path] = _taps(m, flag, t.guide - 1, name)[-1]
+            flag = register(m, _fresh(path, self.tag.x, self.tag.y, p.width), 1, name)
+            fresh[path] = taps(m, flag, t.guide - 1, name)[-1]
         p2 = self._penalties(m)
         left = left_path(self, m, fresh["left"], p2["left"])
         rows = self._row_paths(m, fresh, p2)
         # The four L of each lane meet where the later of the two kinds is.
         aligned = max(t.left, t.rows)
-        left = _lanes(_taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
+        left = _lanes(taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
                       units, p.left_cost_bits)
-        rows = {path: _lanes(_taps(m, Cat(*lanes), aligned - t.rows,
+        rows = {path: _lanes(taps(m, Cat(*lanes), aligned - t.rows,
                                    f"sgm_{path.replace('-', '_')}_aligned")[-1], units, bits)
                 for path, lanes in rows.items()}
         plan = register_plan(len(SGM_PATHS), self.every, 0, True)
@@ -227,9 +210,9 @@ class SemiGlobalAggregation(wiring.Component):
         result = {}
         for k, path in enumerate(SGM_PATHS, 1):
             name = path.replace("-", "_")
-            step = _register(m, absolute_difference(centre, self.guide[k]), 8,
+            step = register(m, absolute_difference(centre, self.guide[k]), 8,
                              f"sgm_step_{name}")
-            result[path] = _register(m, _adaptive_p2(step, p.p1, p.p2, p.p2_adapt),
+            result[path] = register(m, _adaptive_p2(step, p.p1, p.p2, p.p2_adapt),
                                      bits_for(p.p2), f"sgm_p2_{name}")
         return result
 
@@ -266,8 +249,8 @@ class SemiGlobalAggregation(wiring.Component):
 
         # Row addresses (x * R and, for top-right, (x + 1) * R), slot-aligned at 1.
         depth = width * rounds
-        own = _register(m, x * rounds, range(depth), "sgm_row_base")
-        nxt = _register(m, Mux(last_column, 0, (x + 1) * rounds), range(depth),
+        own = register(m, x * rounds, range(depth), "sgm_row_base")
+        nxt = register(m, Mux(last_column, 0, (x + 1) * rounds), range(depth),
                         "sgm_row_base_next")
         word_at = 4                 # address 2, read 3, the RAM's output register 4
         normalise = word_at + 4     # newest word, + P1, minimum of three
@@ -278,46 +261,46 @@ class SemiGlobalAggregation(wiring.Component):
             memory = Memory(shape=shape, depth=depth, init=[], attrs={"no_rw_check": 1})
             m.submodules[f"sgm_rows_{name}"] = memory
             read, write = memory.read_port(domain="sync"), memory.write_port()
-            address = _register(m, base + slots.round(1), range(depth), f"sgm_{name}_address")
+            address = register(m, base + slots.round(1), range(depth), f"sgm_{name}_address")
             m.d.comb += read.addr.eq(address)
-            words.append(_register(m, read.data, shape, f"sgm_{name}_word"))
+            words.append(register(m, read.data, shape, f"sgm_{name}_word"))
             memories.append(write)
         (top, top_left), top_right = _lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.
         store = Store(m, "sgm_top_left_store", unsigned(word_bits), rounds)
         held = store.read(slots.round(word_at))
         store.write(slots.round(word_at), top_left, self._valid_at(word_at))
-        newest = {"top-left": _register(m, held, word_bits, "sgm_top_left_newest"),
-                  "top": _register(m, top, word_bits, "sgm_top_newest"),
-                  "top-right": _register(m, top_right, word_bits, "sgm_top_right_newest")}
+        newest = {"top-left": register(m, held, word_bits, "sgm_top_left_newest"),
+                  "top": register(m, top, word_bits, "sgm_top_newest"),
+                  "top-right": register(m, top_right, word_bits, "sgm_top_right_newest")}
 
         minima, minima_write = self._row_minima(m, p2, normalise)
         results = {}
         for path in SGM_ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
             word = _lanes(newest[path], units, bits)                   # round j + 1 at 6 + j
-            current = _lanes(_register(m, newest[path], word_bits, f"{name}_current"),
+            current = _lanes(register(m, newest[path], word_bits, f"{name}_current"),
                              units, bits)                              # round j at 6 + j
-            plus = [_register(m, v + p1, plus_bits, f"{name}_p{i}") for i, v in
+            plus = [register(m, v + p1, plus_bits, f"{name}_p{i}") for i, v in
                     enumerate(current)]                                # round j at 7 + j
-            values = [_register(m, v, bits, f"{name}_q{i}") for i, v in enumerate(current)]
+            values = [register(m, v, bits, f"{name}_q{i}") for i, v in enumerate(current)]
             # The neighbours across the round's edges, for round j at 7 + j: the previous
             # round's last lane and the next round's first (none outside 0 .. D-1).
-            before = _register(m, Mux(slots.round(word_at + 2) == 0, ones, plus[units - 1]),
+            before = register(m, Mux(slots.round(word_at + 2) == 0, ones, plus[units - 1]),
                                plus_bits, f"{name}_p_before")
-            after = _register(m, Mux(slots.round(word_at + 2) == rounds - 1, ones,
+            after = register(m, Mux(slots.round(word_at + 2) == rounds - 1, ones,
                                      word[0] + p1), plus_bits, f"{name}_p_after")
             neighbours = [before, *plus, after]
-            best = [_register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
+            best = [register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
                               f"{name}_best{i}") for i, v in enumerate(values)]
             minimum, bound = minima[path]
-            step = [_register(m, _normalised(b, minimum, bound,
+            step = [register(m, _normalised(b, minimum, bound,
                                              self._aligned(p2[path], t.guide, normalise,
                                                            f"{name}_p2"),
                                              self._aligned(fresh[path], t.guide, normalise,
                                                            f"{name}_fresh")),
                               bits_for(p.p2), f"{name}_step{i}") for i, b in enumerate(best)]
-            results[path] = [_register(m, c + s, bits, f"{name}_l{i}")
+            results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 
         # L back into the rows' memories at the position's own column.
@@ -353,9 +336,9 @@ class SemiGlobalAggregation(wiring.Component):
                         attrs={"no_rw_check": 1})
         m.submodules.sgm_minima = memory
         read, write = memory.read_port(domain="sync"), memory.write_port()
-        m.d.comb += read.addr.eq(_register(m, Mux(x == p.width - 1, 0, x + 1),
+        m.d.comb += read.addr.eq(register(m, Mux(x == p.width - 1, 0, x + 1),
                                            range(p.width), "sgm_minima_address"))
-        word = dict(zip(SGM_ROW_PATHS, _lanes(_register(m, read.data, 3 * bits,
+        word = dict(zip(SGM_ROW_PATHS, _lanes(register(m, read.data, 3 * bits,
                                                     "sgm_minima_word"), 3, bits)))
         # Column x + 1 for top-right now; for top as column x of the next position; for
         # top-left as column x - 1 two positions on.
@@ -373,7 +356,7 @@ class SemiGlobalAggregation(wiring.Component):
         result = {}
         for path in SGM_ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
-            bound = _register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
+            bound = register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
                               bits + 1, f"{name}_bound")
             result[path] = (self._aligned(used[path], 4, offset, f"{name}_m"),
                             self._aligned(bound, 5, offset, f"{name}_bound"))

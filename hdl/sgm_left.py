@@ -40,7 +40,7 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import Store, bits_for
+from .common import Store, bits_for, register, taps
 from .trees import build_tree, register_plan
 
 __all__ = ["left_path"]
@@ -72,23 +72,6 @@ def _minimum(candidates, bits):
     return beats, choose
 
 
-def _register(m, value, shape, name, enable=None):
-    reg = Signal(shape, name=name, reset_less=True)
-    if enable is None:
-        m.d.sync += reg.eq(value)
-    else:
-        with m.If(enable):
-            m.d.sync += reg.eq(value)
-    return reg
-
-
-def _taps(m, value, depth, name):
-    taps = [value]
-    for k in range(depth):
-        taps.append(_register(m, taps[-1], value.shape(), f"{name}_d{k + 1}"))
-    return taps
-
-
 def _file(m, count, shape, name):
     """``count`` registers read by a column index (its low bits)."""
     return [Signal(shape, name=f"{name}{k}", reset_less=True) for k in range(count)]
@@ -99,13 +82,13 @@ def _pick(m, values, lane, name):
     the high bits the group (returned combinationally, a clock after ``values``)."""
     width = len(values[0])
     if len(values) == 1:
-        return _register(m, values[0], width, f"{name}_g0")
+        return register(m, values[0], width, f"{name}_g0")
     low = (len(lane) + 1) // 2
     size = 1 << low
-    groups = [_register(m, Array(_padded(values[k:k + size], size))[lane[:low]], width,
+    groups = [register(m, Array(_padded(values[k:k + size], size))[lane[:low]], width,
                         f"{name}_g{k}")
               for k in range(0, len(values), size)]
-    high = _register(m, lane[low:], max(1, len(lane) - low), f"{name}_high")
+    high = register(m, lane[low:], max(1, len(lane) - low), f"{name}_high")
     if len(groups) == 1:
         return groups[0]
     return Array(_padded(groups, 1 << len(high)))[high]
@@ -153,7 +136,7 @@ _LANES_PER_COPY = 8
 def _copies(m, value, shape, lanes, name, enable=None):
     """``value`` registered once per group of :data:`_LANES_PER_COPY` lanes: the list of
     each lane's copy."""
-    groups = [_register(m, value, shape, f"{name}_copy{k}", enable)
+    groups = [register(m, value, shape, f"{name}_copy{k}", enable)
               for k in range(-(-lanes // _LANES_PER_COPY))]
     return [groups[i // _LANES_PER_COPY] for i in range(lanes)]
 
@@ -193,12 +176,12 @@ def left_path(owner, m, fresh, p2):
     first_m, first_round, first_lane = _running_argmin(owner, m, item, tree,
                                                        lambda a, b: a < b, "sgm_left_c0")
     start = valid(early) & fresh_at(early)
-    b0 = _register(m, Cat(first_lane, first_round), lane_bits + round_bits, "sgm_left_b0",
+    b0 = register(m, Cat(first_lane, first_round), lane_bits + round_bits, "sgm_left_b0",
                    start)
-    m0_held = _register(m, first_m, cost_bits, "sgm_left_m0_held", start)
+    m0_held = register(m, first_m, cost_bits, "sgm_left_m0_held", start)
     # Written at a fresh start only, but at ``hand`` >= where x <= J read it, so that the
     # next row's first position cannot overwrite it before the last reader of this row.
-    m0 = _register(m, m0_held, cost_bits, "sgm_left_m0", valid(hand) & fresh_at(hand))
+    m0 = register(m, m0_held, cost_bits, "sgm_left_m0", valid(hand) & fresh_at(hand))
 
     # What positions x - J .. x - 1 leave for x: Lu(x - J, b(x)), C(x - k, b(x)).
     history = _file(m, age, lane_bits + round_bits, "sgm_left_g")
@@ -212,7 +195,7 @@ def left_path(owner, m, fresh, p2):
     # The neighbours across the round's edges: the last lane of the word read a clock ago
     # (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own). Outside
     # 0 .. D-1 the lane itself stands in: Lu(d) + P1 never beats Lu(d).
-    before = _register(m, centre[units - 1], bits, "sgm_left_before")
+    before = register(m, centre[units - 1], bits, "sgm_left_before")
     below = Mux(slots.round(loop) == 0, centre[0], before)
     firsts = None
     if rounds > 1:
@@ -235,9 +218,9 @@ def left_path(owner, m, fresh, p2):
         beats, choose = _minimum(candidates, bits)
         if t.left_stages == 2:
             # Compare, then choose and add: the loop has R - 1 >= 2 clocks to spare.
-            candidates = [_register(m, c, bits, f"sgm_left_cand{i}_{k}")
+            candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
                           for k, c in enumerate(candidates)]
-            beats = {key: _register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
+            beats = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
                      for key, b in beats.items()}
             _, choose = _minimum(candidates, bits)
         lanes.append(choose(beats))
@@ -247,14 +230,14 @@ def left_path(owner, m, fresh, p2):
     store.write(slots.round(last), Cat(*new), owner._valid_at(last))
     if firsts is not None:
         firsts.write(slots.round(last), new[0], owner._valid_at(last))
-    lu = [_register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
+    lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
     # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
     item = _argmin(m, lu, less, "sgm_left_lu_min")
     minimum, best_round, best_lane = _running_argmin(owner, m, item, lu_at + tree, less,
                                                      "sgm_left_lu_min")
     done = valid(argmin_at)
-    previous_m = _register(m, minimum, bits, "sgm_left_m", done)
+    previous_m = register(m, minimum, bits, "sgm_left_m", done)
     x = column(argmin_at)
     for k, entry in enumerate(history):
         with m.If(done & (x[:age.bit_length() - 1] == k)):
@@ -264,8 +247,8 @@ def left_path(owner, m, fresh, p2):
     # L(x, d) = Lu(x, d) - m(x - 1): Lu waits for m(x - 1).
     out = t.left - 1
     fresh_out = fresh_at(out)
-    delayed = [_taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
-    return [_register(m, (v - Mux(fresh_out, 0, previous_m))[:p.left_cost_bits],
+    delayed = [taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
+    return [register(m, (v - Mux(fresh_out, 0, previous_m))[:p.left_cost_bits],
                       p.left_cost_bits, f"sgm_left_l{i}") for i, v in enumerate(delayed)]
 
 
@@ -280,16 +263,16 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
     # subtractions and comparisons in front of the files' multiplexers and the additions
     # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5).
     x = column(at - 1)
-    terms = [Mux(_register(m, x > k, 1, f"sgm_left_has{k}"),
-                 Array(entries)[_register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
+    terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
+                 Array(entries)[register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
              for k, entries in enumerate(sums, 1)]
     terms.append(owner._aligned(p2, t.guide, at, "sgm_left_p2"))
     while len(terms) > 1:   # a tree of additions, not a chain
         terms = [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
-    total = _register(m, terms[0][:bits], bits, "sgm_left_csum")
+    total = register(m, terms[0][:bits], bits, "sgm_left_csum")
     x = column(at)
-    near = _register(m, x <= steps, 1, "sgm_left_near")
-    start = Mux(near, m0, Array(chosen)[_register(m, x[:index], index, "sgm_left_chosen_at")])
+    near = register(m, x <= steps, 1, "sgm_left_near")
+    start = Mux(near, m0, Array(chosen)[register(m, x[:index], index, "sgm_left_chosen_at")])
     return (start + total)[:bits]
 
 
@@ -306,11 +289,11 @@ def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
         # front of the history's multiplexer they were census 7x7 SGM's critical path
         # (13.5 ns, ECP5).
         x = column(at - 1)
-        near = _register(m, x + k <= age, 1, f"sgm_left_young{k}")
-        entry = _register(m, (x + k)[:age.bit_length() - 1], age.bit_length() - 1,
+        near = register(m, x + k <= age, 1, f"sgm_left_young{k}")
+        entry = register(m, (x + k)[:age.bit_length() - 1], age.bit_length() - 1,
                           f"sgm_left_history_at{k}")
         wanted = Mux(near, b0, Array(history)[entry])
-        b = _register(m, wanted, len(b0), f"sgm_left_b{k}", slots.first(at))
+        b = register(m, wanted, len(b0), f"sgm_left_b{k}", slots.first(at))
         lane, round_ = b[:lane_bits], b[lane_bits:]
         if k < steps:
             values, files, picked_at = owner._costs[at + 1], sums[k - 1], at + 2
@@ -318,7 +301,7 @@ def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
             values, files, picked_at = lu, chosen, t.left_lu + 1
         picked = _pick(m, values, lane, f"sgm_left_pick{k}")
         # b holds for R clocks only: its round is compared beside the first pick level.
-        match = _register(m, slots.round(picked_at - 1) == round_, 1, f"sgm_left_match{k}")
+        match = register(m, slots.round(picked_at - 1) == round_, 1, f"sgm_left_match{k}")
         here = column(picked_at)[:index]
         write = owner._valid_at(picked_at) & match
         if k == steps:
