@@ -24,37 +24,14 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from .banks import choose_bank
 from .common import SlotClock, Store, bits_for, pipe, tag_layout
-from .plan_structure import (BANK_CHOICE, bank_choice_levels, cost_banks, horizontal_plan,
+from .plan_structure import (bank_choice_levels, cost_banks, horizontal_plan,
                              vertical_bits, vertical_plan)
 from .plan_timing import aggregation_latency, unit_skews, vertical_clocks
 from .trees import DEFAULT_EVERY, build_sum
 
 __all__ = ["Aggregation"]
-
-
-def _choose_bank(m, words, bank, name):
-    """The word of bank ``bank`` among the banks' output registers ``words``, two clocks
-    after ``bank``: chosen among up to :data:`~.plan_structure.BANK_CHOICE` banks at a time, each
-    level but the last registered (its digit of the index a clock later each time)."""
-    digit = BANK_CHOICE.bit_length() - 1
-
-    def digits(low, high, level):
-        """The index's digits ``low:high``, delayed to the choice of ``level``."""
-        return pipe(m, bank[low:high], 2 + level, f"{name}{level}" if level else name)
-
-    level = 0
-    while len(words) > BANK_CHOICE:
-        chosen = digits(digit * level, digit * (level + 1), level)
-        groups = [words[g:g + BANK_CHOICE] for g in range(0, len(words), BANK_CHOICE)]
-        words = []
-        for g, group in enumerate(groups):
-            word = Signal.like(group[0], name=f"{name}{level}_{g}")
-            m.d.sync += word.eq(Array(group)[chosen] if len(group) > 1 else group[0])
-            words.append(word)
-        level += 1
-    chosen = digits(digit * level, len(bank), level)
-    return Array(words)[chosen]
 
 
 def _row_above_inside(y, above, height):
@@ -207,8 +184,8 @@ class Aggregation(wiring.Component):
             if len(banks) == 1:
                 m.d.sync += stored_word.eq(words[0])
             else:
-                m.d.sync += stored_word.eq(_choose_bank(m, words, unit_address[low:],
-                                                        f"cost_lines{i}_bank"))
+                m.d.sync += stored_word.eq(choose_bank(m, words, unit_address[low:],
+                                                       f"cost_lines{i}_bank"))
             terms = [Mux(ok, row, 0) for ok, row in zip(unit_inside, [newest, *stored])]
             # The masks are a level of logic in front of the adders.
             total = build_sum(m, 1, terms, vertical_plan(p, self.every))

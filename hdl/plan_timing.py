@@ -11,14 +11,16 @@ elaborated hardware.
 from dataclasses import dataclass
 
 from ..params import SGM_PATH_COUNT, SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .plan_structure import (bank_choice_levels, cost_plan, cost_rows, horizontal_plan,
-                             masks_after_compare, row_sum_plan, transform_plan, vertical_plan)
+from .plan_structure import (bank_choice_levels, cost_banks, cost_plan, cost_rows,
+                             horizontal_plan, masks_after_compare, row_sum_plan,
+                             transform_plan, vertical_plan)
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
-           "SGM_LEFT_LEAD", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "evaluation_latency",
+           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages", "sgm_tree_clocks", "SgmTiming",
+           "sgm_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
 
@@ -153,8 +155,18 @@ SGM_GUIDE_CLOCKS = 2
 #: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the
 #: row address, its block RAM read address, the read, the RAM's output register, the
 #: top-left store's read register, the newest word's register (the next round's first
-#: value arrives), L + P1, the minimum of the three candidates, the normalisation, + C.
+#: value arrives), L + P1, the minimum of the three candidates, the normalisation's
+#: comparison and difference, + C; with the rows in one bank (:func:`sgm_row_clocks`).
 SGM_ROW_CLOCKS = 10
+
+
+def sgm_row_clocks(params):
+    """Clocks to L of the paths from the row above: :data:`SGM_ROW_CLOCKS`, and with the
+    path rows in several banks (W R words, cut as a cost line buffer,
+    :func:`~.plan_structure.cost_banks`) a clock more per level of the bank's choice
+    (:func:`~.banks.banked_memory`)."""
+    several = len(cost_banks(params)) > 1
+    return SGM_ROW_CLOCKS + (bank_choice_levels(params) if several else 0)
 
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
@@ -162,6 +174,16 @@ SGM_ROW_CLOCKS = 10
 #: C(p, b) picked (two clocks), its file written, the sum of P2 and the picked costs, then
 #: ref + P2 (the clock before the loop).
 SGM_LEFT_LEAD = 5
+
+
+def sgm_left_stages(rounds):
+    """Clocks of the left path's lane update: round j + 1 of x - 1 is written R - 1 clocks
+    before round j of x reads it, so the update may take up to R - 1 clocks. One clock
+    (comparisons, choice and addition) at R <= 2; the comparisons registered at R = 3; from
+    R = 4 the choice registered as well, so that each clock holds one carry chain or one
+    multiplexer (the choice and the 11-bit addition were 9.6 ns in one clock,
+    docs/sgm/lane_loop_probe.py)."""
+    return min(max(rounds - 1, 1), 3)
 
 
 def sgm_tree_clocks(units):
@@ -179,7 +201,7 @@ class SgmTiming:
     tree: int           #: T, registers of a minimum over the round's D/R values
     guide: int          #: P2 of every path (slot-aligned)
     loop: int           #: the left path's loop reads Lu(x - 1, .) (ref + P2 is there)
-    left_stages: int    #: clocks of the loop's lane update (1 at R <= 2, else 2)
+    left_stages: int    #: clocks of the loop's lane update (:func:`sgm_left_stages`)
     left_lu: int        #: Lu(x, .) in its register
     left_argmin: int    #: m(x) and argmin Lu(x, .) complete
     left_early: int     #: m(0) and argmin C(0, .) complete (from the costs)
@@ -205,7 +227,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     """
     rounds, steps, age = params.rounds, SGM_TRACK_STEPS, SGM_TRACK_AGE
     tree = sgm_tree_clocks(params.per_round)
-    stages = 1 if rounds < 3 else 2
+    stages = sgm_left_stages(rounds)
     early = tree + rounds
     loop = tree + SGM_LEFT_LEAD + 1
     lu = loop + stages
@@ -224,7 +246,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # Lu(x - J, b) in its file before position x reads it at loop - 1.
     assert lu + rounds + 1 <= steps * rounds + loop - 1
     left = lu + tree + 2
-    rows = SGM_ROW_CLOCKS
+    rows = sgm_row_clocks(params)
     summed = max(left, rows) + sum(register_plan(SGM_PATH_COUNT, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, picks,
                      left, rows, rows + tree + rounds, summed)

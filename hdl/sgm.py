@@ -41,8 +41,10 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
+from .banks import banked_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, tag_layout, taps
-from .plan_timing import sgm_timing
+from .plan_structure import cost_banks
+from .plan_timing import SGM_ROW_CLOCKS, sgm_timing
 from .sgm_left import left_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
 
@@ -93,10 +95,11 @@ def _minimum3(centre, lower, upper):
     return Mux(lower_wins, lower, Mux(upper_wins, upper, centre))
 
 
-def _normalised(best, minimum, bound, p2, fresh):
-    """A path from above: min(best - m, P2) for best = min(Lq(d), Lq(d +- 1) + P1) >= m
-    (``bound`` = m + P2), and 0 at a fresh start (L = C)."""
-    return Mux(fresh, 0, Mux(best <= bound, best - minimum, p2))
+def _normalised(below, over, p2, fresh):
+    """A path from above: min(best - m, P2) for best = min(Lq(d), Lq(d +- 1) + P1) >= m,
+    from ``below`` = (best <= m + P2) and ``over`` = best - m (valid when ``below``); 0 at a
+    fresh start (L = C)."""
+    return Mux(fresh, 0, Mux(below, over, p2))
 
 
 def _lanes(word, count, bits):
@@ -231,12 +234,14 @@ class SemiGlobalAggregation(wiring.Component):
     def _row_paths(self, m, fresh, p2):
         """L of top-left, top and top-right per lane, at ``timing.rows``.
 
-        Offsets after the input, for round j: the word addresses at 2 + j, the words out
-        of the block RAMs' output registers at 4 + j, the top-left word held from the
-        previous position beside them at 5 + j; the first lane of round j + 1 arrives a
-        clock later, so the candidates L + P1 are formed at 7 + j, their minimum at 8 + j,
-        the normalised step at 9 + j and L = C + step at 10 + j, which is written back to
-        the position's own column and goes into the minima.
+        Offsets after the input, for round j, with the rows in one bank (a clock later per
+        level of the bank's choice with several, ``plan_timing.sgm_row_clocks``): the word
+        addresses at 2 + j, the words out of the block RAMs' output registers at 4 + j,
+        the top-left word held from the previous position beside them at 5 + j; the first
+        lane of round j + 1 arrives a clock later, so the candidates L + P1 are formed at
+        7 + j, their minimum at 8 + j, its comparison with m + P2 and difference to m at
+        9 + j, and L = C + the normalised step at 10 + j, which is written back to the
+        position's own column and goes into the minima.
         """
         p, t, slots = self.params, self.timing, self._slots
         units, rounds, width = p.per_round, p.rounds, p.width
@@ -247,24 +252,33 @@ class SemiGlobalAggregation(wiring.Component):
         x = self.tag.x
         last_column = x == width - 1
 
-        # Row addresses (x * R and, for top-right, (x + 1) * R), slot-aligned at 1.
+        # Row addresses (x * R and, for top-right, (x + 1) * R), slot-aligned at 1, without a
+        # multiplier: consecutive positions are raster-continuous (x + 1, or 0 at a line
+        # start), so the bases advance by R per position.
         depth = width * rounds
-        own = register(m, x * rounds, range(depth), "sgm_row_base")
-        nxt = register(m, Mux(last_column, 0, (x + 1) * rounds), range(depth),
-                        "sgm_row_base_next")
-        word_at = 4                 # address 2, read 3, the RAM's output register 4
+        own = Signal(range(depth), name="sgm_row_base", reset_less=True)
+        nxt = Signal(range(depth), name="sgm_row_base_next", reset_less=True)
+        with m.If(slots.first(0) & self.tag.valid):
+            m.d.sync += [own.eq(Mux(x == 0, 0, own + rounds)),
+                         nxt.eq(Mux(last_column, 0, Mux(x == 0, rounds, nxt + rounds)))]
+        # The address at 2, the read at 3, the RAM's output register at 4, then the levels
+        # of the bank's choice: the word at 4 + t.rows - SGM_ROW_CLOCKS.
+        word_at = 4 + t.rows - SGM_ROW_CLOCKS
         normalise = word_at + 4     # newest word, + P1, minimum of three
         assert t.rows == normalise + 2, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
-        memories, words = [], []
-        for name, base, shape in (("top", own, unsigned(2 * word_bits)),
-                                  ("top_right", nxt, unsigned(word_bits))):
-            memory = Memory(shape=shape, depth=depth, init=[], attrs={"no_rw_check": 1})
-            m.submodules[f"sgm_rows_{name}"] = memory
-            read, write = memory.read_port(domain="sync"), memory.write_port()
+        banks = cost_banks(p)
+        # L back into the rows' memories at the position's own column, at t.rows.
+        write_address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
+        m.d.sync += write_address.eq(self._aligned(own, 1, t.rows - 1, "sgm_rows_base")
+                                     + slots.round(t.rows - 1))
+        written = {"top": Signal(2 * word_bits, name="sgm_rows_top_written"),
+                   "top_right": Signal(word_bits, name="sgm_rows_top_right_written")}
+        words = []
+        for name, base in (("top", own), ("top_right", nxt)):
             address = register(m, base + slots.round(1), range(depth), f"sgm_{name}_address")
-            m.d.comb += read.addr.eq(address)
-            words.append(register(m, read.data, shape, f"sgm_{name}_word"))
-            memories.append(write)
+            words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
+                                       banks, address, write_address, written[name],
+                                       self._valid_at(t.rows)))
         (top, top_left), top_right = _lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.
         store = Store(m, "sgm_top_left_store", unsigned(word_bits), rounds)
@@ -294,23 +308,21 @@ class SemiGlobalAggregation(wiring.Component):
             best = [register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
                               f"{name}_best{i}") for i, v in enumerate(values)]
             minimum, bound = minima[path]
-            step = [register(m, _normalised(b, minimum, bound,
-                                             self._aligned(p2[path], t.guide, normalise,
-                                                           f"{name}_p2"),
-                                             self._aligned(fresh[path], t.guide, normalise,
-                                                           f"{name}_fresh")),
-                              bits_for(p.p2), f"{name}_step{i}") for i, b in enumerate(best)]
+            # The comparison with m + P2 and the difference to m side by side, then the
+            # choice and + C (the three in one clock were 6 LUT levels, census 7x7).
+            below = [register(m, b <= bound, 1, f"{name}_below{i}")
+                     for i, b in enumerate(best)]
+            above_m = [register(m, (b - minimum)[:bits_for(p.p2)], bits_for(p.p2),
+                                f"{name}_over{i}") for i, b in enumerate(best)]
+            p2_now = self._aligned(p2[path], t.guide, normalise + 1, f"{name}_p2")
+            fresh_now = self._aligned(fresh[path], t.guide, normalise + 1, f"{name}_fresh")
+            step = [_normalised(le, over, p2_now, fresh_now)
+                    for le, over in zip(below, above_m)]
             results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 
-        # L back into the rows' memories at the position's own column.
-        address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
-        m.d.sync += address.eq(self._aligned(own, 1, t.rows - 1, "sgm_rows_base")
-                               + slots.round(t.rows - 1))
-        for write, written in zip(memories, (Cat(*results["top"], *results["top-left"]),
-                                           Cat(*results["top-right"]))):
-            m.d.comb += [write.addr.eq(address), write.data.eq(written),
-                         write.en.eq(self._valid_at(t.rows))]
+        m.d.comb += [written["top"].eq(Cat(*results["top"], *results["top-left"])),
+                     written["top_right"].eq(Cat(*results["top-right"]))]
         # Their minima, once the last round's running minimum is complete.
         running = [self._running_min(m, results[path], t.rows,
                                      f"sgm_{path.replace('-', '_')}_m") for path in SGM_ROW_PATHS]

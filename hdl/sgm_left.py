@@ -11,8 +11,9 @@ ref(x) + P2(x)); Lu(x-1, .) of round j is word j of a store of R words (a regist
 R = 1), the neighbour d - 1 across the round's lower edge is the last lane of the word the
 previous round read (registered), the neighbour d + 1 across the upper edge the first lane
 of word j + 1 (a store of its own). Round j + 1 of x - 1 is written R - 1 clocks (back to
-back) before round j of x reads it: one clock of logic at R <= 2, two (the comparisons,
-then the choice and the addition) from R = 3 on. ref(x) + P2(x) is one register per group
+back) before round j of x reads it: one clock of logic at R <= 2, two at R = 3 (the
+comparisons, then the choice and the addition), three from R = 4 on (the comparisons, the
+choice, the addition; ``plan_timing.sgm_left_stages``). ref(x) + P2(x) is one register per group
 of lanes, constant through the slot: nothing inside the loop spans all D disparities.
 
 **The reference.** ref(x) = Lu(s, b) + C(s+1, b) + ... + C(x-1, b), s = max(x - J, 0),
@@ -216,14 +217,18 @@ def left_path(owner, m, fresh, p2):
                       reference[i]]
         candidates = [c[:bits] for c in candidates]
         beats, choose = _minimum(candidates, bits)
-        if t.left_stages == 2:
-            # Compare, then choose and add: the loop has R - 1 >= 2 clocks to spare.
+        if t.left_stages >= 2:
+            # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
             candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
                           for k, c in enumerate(candidates)]
             beats = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
                      for key, b in beats.items()}
             _, choose = _minimum(candidates, bits)
-        lanes.append(choose(beats))
+        best = choose(beats)
+        if t.left_stages == 3:
+            # Then add: R - 1 >= 3 clocks to spare.
+            best = register(m, best, bits, f"sgm_left_best{i}")
+        lanes.append(best)
     fresh_copies = _copies(m, fresh_at(last - 1), 1, units, "sgm_left_fresh_lane")
     new = [(c + Mux(f, 0, best))[:bits]
            for c, f, best in zip(costs[last], fresh_copies, lanes)]

@@ -22,7 +22,8 @@ from amaranth.hdl import Value
 from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
-from npstereo.hdl import calculation_stage, plan, plan_memories, plan_timing
+from npstereo.hdl import banks as hdl_banks
+from npstereo.hdl import calculation_stage, plan, plan_memories, plan_structure, plan_timing
 from npstereo.hdl import sgm as hdl_sgm
 from npstereo.hdl import sgm_left
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
@@ -220,9 +221,30 @@ def test_broken_adaptive_p2_is_caught(monkeypatch):
 
 
 def test_broken_row_normalisation_is_caught(monkeypatch):
-    """The paths from above capped at P2 without the normalisation (best - m)."""
-    monkeypatch.setattr(hdl_sgm, "_normalised", lambda best, minimum, bound, p2, fresh:
-                        hdl_sgm.Mux(fresh, 0, hdl_sgm.Mux(best <= p2, best, p2)))
+    """The paths from above not capped at P2 (best - m where m + P2 is smaller)."""
+    monkeypatch.setattr(hdl_sgm, "_normalised", lambda below, over, p2, fresh:
+                        hdl_sgm.Mux(fresh, 0, over))
+    assert_stage_caught(monkeypatch)
+
+
+@pytest.mark.parametrize("bank, levels", [(32, 1), (8, 2)])
+def test_path_rows_in_banks_match_golden(monkeypatch, bank, levels):
+    """Path rows of W R = 80 words in banks of 32 or 8 (3 or 10 banks): the bank chosen in
+    one or two registered levels, L a clock later per level."""
+    monkeypatch.setattr(plan_structure, "COST_BANK", bank)
+    assert plan_structure.bank_choice_levels(BROKEN) == levels
+    assert plan_timing.sgm_row_clocks(BROKEN) == plan_timing.SGM_ROW_CLOCKS + levels
+    check_stage(BROKEN, monkeypatch, seed=bank)
+
+
+def test_broken_path_rows_bank_choice_is_caught(monkeypatch):
+    """The bank chosen a clock early: words from the bank of the next address."""
+    monkeypatch.setattr(plan_structure, "COST_BANK", 32)
+    real_pipe = hdl_banks.pipe
+
+    def early(m, value, steps, name, reset=False):
+        return real_pipe(m, value, 1 if name.endswith("_bank") else steps, name, reset)
+    monkeypatch.setattr(hdl_banks, "pipe", early)
     assert_stage_caught(monkeypatch)
 
 
@@ -287,7 +309,7 @@ def test_any_rounds_dividing_d_are_built(disparities, rounds):
     params = sgm_params("census", 5, disparities, rounds, width=disparities + 4, height=4)
     plan.check_buildable(params)
     timing = plan_timing.sgm_timing(params)
-    assert timing.left_stages == (1 if rounds < 3 else 2)
+    assert timing.left_stages == (1 if rounds < 3 else 2 if rounds == 3 else 3)
 
 
 def test_rounds_not_dividing_d_are_refused():
