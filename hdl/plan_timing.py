@@ -206,6 +206,7 @@ class SgmTiming:
     left_argmin: int    #: m(x) and argmin Lu(x, .) complete
     left_early: int     #: m(0) and argmin C(0, .) complete (from the costs)
     left_hand: int      #: m(0) stored for the row's first J positions
+    left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
@@ -236,10 +237,21 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # b(p + k) registered once G(p + k - K) and G(0) are there; it holds for R clocks, as
     # long as the first level of its multiplexer needs it: C(p, .) is delayed to it, and
     # for k = J it is registered just before Lu(p, .).
-    picks = tuple(max(tree + 1, argmin + 1 - (age - k) * rounds) for k in range(1, steps))
-    picks += (lu - 1,)
+    # The history's multiplexer takes two clocks (read a clock before b is registered, from
+    # the column two clocks before) where the margins below allow it: everywhere but at
+    # R = 1 with T = 8 (D > 128), where it takes one.
+    def picks_with(history):
+        return tuple(max(tree + 1, history, argmin + history - (age - k) * rounds)
+                     for k in range(1, steps)) + (lu - 1,)
+
+    def margins(picks):
+        return all(at + rounds + 2 <= k * rounds + loop - 2
+                   for k, at in enumerate(picks[:-1], 1))
+    history = 2 if margins(picks_with(2)) else 1
+    picks = picks_with(history)
     for k, at in enumerate(picks, 1):
-        assert at >= max(tree + 1, argmin + 1 - (age - k) * rounds), (k, at)
+        # G(p + k - K) in the history before position p reads it.
+        assert at - history + (age - k) * rounds >= argmin, (k, at)
     for k, at in enumerate(picks[:-1], 1):
         # C(x - k, b(x)) in its file before position x sums them at loop - 2.
         assert at + rounds + 2 <= k * rounds + loop - 2, (k, at)
@@ -248,8 +260,8 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     left = lu + tree + 2
     rows = sgm_row_clocks(params)
     summed = max(left, rows) + sum(register_plan(SGM_PATH_COUNT, every, 0, True))
-    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, picks,
-                     left, rows, rows + tree + rounds, summed)
+    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, history,
+                     picks, left, rows, rows + tree + rounds, summed)
 
 
 # Evaluation, L/R check, the whole core ----------------------------------------------------

@@ -290,15 +290,22 @@ def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
     lane_bits = bits_for(p.per_round - 1)
     index = steps.bit_length() - 1
     for k, at in enumerate(t.left_picks, 1):
-        # The comparison and the history's address from the column a clock ahead: in
-        # front of the history's multiplexer they were census 7x7 SGM's critical path
-        # (13.5 ns, ECP5).
-        x = column(at - 1)
+        # The comparison and the history's address from the column ahead, and the
+        # history's multiplexer in two clocks where the margins allow (the entry's low bits
+        # within groups, registered, then the group): in front of the multiplexer they were
+        # census 7x7 SGM's critical path (13.5 ns, ECP5), and the multiplexer in one clock
+        # was next (9.9 ns, five LUT levels, at R = 10).
+        ahead = t.left_history
+        x = column(at - ahead)
         near = register(m, x + k <= age, 1, f"sgm_left_young{k}")
         entry = register(m, (x + k)[:age.bit_length() - 1], age.bit_length() - 1,
                           f"sgm_left_history_at{k}")
-        wanted = Mux(near, b0, Array(history)[entry])
-        b = register(m, wanted, len(b0), f"sgm_left_b{k}", slots.first(at))
+        if ahead == 2:
+            near = register(m, near, 1, f"sgm_left_young{k}_at")
+            tracked = _pick(m, history, entry, f"sgm_left_history{k}")
+        else:
+            tracked = Array(history)[entry]
+        b = register(m, Mux(near, b0, tracked), len(b0), f"sgm_left_b{k}", slots.first(at))
         lane, round_ = b[:lane_bits], b[lane_bits:]
         if k < steps:
             values, files, picked_at = owner._costs[at + 1], sums[k - 1], at + 2
