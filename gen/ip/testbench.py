@@ -77,13 +77,19 @@ module {TB_TOP};
         .first_in(first_in), .last_out(last_out));
 
     reg [{codec.beat.size - 1}:0] expected [0:PIXELS-1];
-    integer i, errors, cycles;
+    integer i, errors, cycles, report;
     initial begin
         $readmemh("{EXPECTED}", expected);
         cycles = 0;
+        report = PIXELS / 10;
         while (done !== 1'b1 && cycles < TIMEOUT) begin
             @(posedge harness.clk);
             cycles = cycles + 1;
+            // Progress for large frames, which Icarus takes minutes over.
+            if (received >= report && received < PIXELS) begin
+                $display("{TB_TOP}: %0d of %0d output pixels", received, PIXELS);
+                report = report + PIXELS / 10 + 1;
+            end
         end
         if (done !== 1'b1) begin
             $display("{TB_TOP}: FAIL: %0d of %0d output pixels after %0d clocks",
