@@ -54,6 +54,7 @@ def _argv(command, tmp_path):
                   [("--out", None)]),
         "demo": ([command, "--no-hardware"], [("--out", None)]),
         "verilog": ([command, *small, "--width", "16", "--height", "4"], [("--out", ".v")]),
+        "ip": ([command, *small, "--width", "16", "--height", "4"], [("--out", None)]),
         "cosim": ([command, "--simulator", "amaranth", "--synthetic", *small, "--crop", "16x4"],
                   [("--out", None)]),
         "report": ([command, *small, "--width", "16", "--height", "4"], [("--json", ".json")]),

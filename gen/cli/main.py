@@ -27,6 +27,7 @@ COMMANDS = {
     "paper": "regenerate the paper's quality figures (Figs. 6, 8, 10-12)",
     "demo": "run everything on the embedded synthetic scene",
     "verilog": "generate the Verilog of a stereo core",
+    "ip": "package a core for FuseSoC, IP-XACT and Platform Designer",
     "cosim": "co-simulate the generated core on one frame, bit for bit",
     "report": "FPGA resources and clock of a core (Yosys, nextpnr)",
     "explore": "quality x logic x memory x clock of a grid for one device (Dask)",
