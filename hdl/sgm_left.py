@@ -193,29 +193,34 @@ def left_path(owner, m, fresh, p2):
     store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
     word = store.read(slots.round(loop))
     centre = [word[i * bits:(i + 1) * bits] for i in range(units)]
-    # The neighbours across the round's edges: the last lane of the word read a clock ago
-    # (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own). Outside
-    # 0 .. D-1 the lane itself stands in: Lu(d) + P1 never beats Lu(d).
-    before = register(m, centre[units - 1], bits, "sgm_left_before")
-    below = Mux(slots.round(loop) == 0, centre[0], before)
+    # The neighbours across the round's edges, + P1: the last lane of the word read a clock
+    # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
+    # keeps it + P1). Outside 0 .. D-1 the lane itself stands in: Lu(d) + P1 never beats
+    # Lu(d). The edge flags come from the round counters of a clock earlier, registered:
+    # the counter, the store's read and the comparisons in one clock were census 7x7 SGM's
+    # critical path at R = 10 (10.6 ns).
+    plus = [(c + p.p1)[:bits] for c in centre]
+    before = register(m, plus[units - 1], bits, "sgm_left_before")
     firsts = None
     if rounds > 1:
+        first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
+        last_round = register(m, slots.round(loop - 1) == rounds - 1, 1,
+                              "sgm_left_last_round")
         firsts = Store(m, "sgm_left_firsts", unsigned(bits), rounds)
         # The round counter of a clock earlier reads j + 1 (mod R) in round j.
         following = firsts.read(slots.round(loop - 1))
-        above = Mux(slots.round(loop) == rounds - 1, centre[units - 1], following)
+        below = Mux(first_round, plus[0], before)
+        above = Mux(last_round, plus[units - 1], following)
     else:
-        above = centre[units - 1]
-    neighbours = [below, *centre, above]
+        below, above = plus[0], plus[units - 1]
+    neighbours = [below, *plus, above]
     # ref(x) + P2(x), loaded in the clock before round 0 and held through the slot.
     reference = _copies(m, _reference(owner, m, column, m0, p2, chosen, sums), bits, units,
                         "sgm_left_ref", slots.first(loop - 1))
     last = loop + t.left_stages - 1           # the clock that writes Lu(x, round j)
     lanes = []
     for i in range(units):
-        candidates = [centre[i], neighbours[i] + p.p1, neighbours[i + 2] + p.p1,
-                      reference[i]]
-        candidates = [c[:bits] for c in candidates]
+        candidates = [centre[i], neighbours[i], neighbours[i + 2], reference[i]]
         beats, choose = _minimum(candidates, bits)
         if t.left_stages >= 2:
             # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
@@ -234,7 +239,10 @@ def left_path(owner, m, fresh, p2):
            for c, f, best in zip(costs[last], fresh_copies, lanes)]
     store.write(slots.round(last), Cat(*new), owner._valid_at(last))
     if firsts is not None:
-        firsts.write(slots.round(last), new[0], owner._valid_at(last))
+        # Lane 0's Lu + P1 from C + P1 (registered a clock before): one addition to the store.
+        cost_plus = register(m, costs[last - 1][0] + p.p1, bits + 1, "sgm_left_cost_plus")
+        firsts.write(slots.round(last), (cost_plus + Mux(fresh_copies[0], 0, lanes[0]))[:bits],
+                     owner._valid_at(last))
     lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
     # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
