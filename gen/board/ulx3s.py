@@ -18,10 +18,7 @@ from amaranth.lib.cdc import ResetSynchronizer
 
 from .tmds import Serialiser, TMDSEncoder
 
-__all__ = ["ULX3STop", "PIXEL_HZ", "SHIFT_HZ"]
-
-PIXEL_HZ = 25e6
-SHIFT_HZ = 125e6
+__all__ = ["ULX3STop"]
 
 #: EHXPLLL parameters from ``ecppll -i 25 -o 125 --clkout1 25``.
 _PLL = dict(
@@ -51,17 +48,15 @@ class ULX3STop(wiring.Component):
         m.domains.sync = ClockDomain("sync")
         m.domains.shift = ClockDomain("shift")
         locked = Signal()
-        # Named signals for the clock constraints (nextpnr's report lists them by net).
-        pixel_clock, shift_clock = Signal(name="pixel_clock"), Signal(name="shift_clock")
+        # No constraint of our own on the PLL's outputs: nextpnr derives them (125 and
+        # 25 MHz) from the oscillator's, which the platform sets on clk25; constraints on
+        # named nets were lost to Yosys' net merging and ignored.
         m.submodules.pll = Instance(
             "EHXPLLL", **_PLL,
-            i_RST=0, i_STDBY=0, i_CLKI=clk25.i, i_CLKFB=shift_clock,
+            i_RST=0, i_STDBY=0, i_CLKI=clk25.i, i_CLKFB=ClockSignal("shift"),
             i_PHASESEL0=0, i_PHASESEL1=0, i_PHASEDIR=1, i_PHASESTEP=1, i_PHASELOADREG=1,
             i_PLLWAKESYNC=0, i_ENCLKOP=0,
-            o_CLKOP=shift_clock, o_CLKOS=pixel_clock, o_LOCK=locked)
-        m.d.comb += [ClockSignal("sync").eq(pixel_clock), ClockSignal("shift").eq(shift_clock)]
-        platform.add_clock_constraint(pixel_clock, PIXEL_HZ)
-        platform.add_clock_constraint(shift_clock, SHIFT_HZ)
+            o_CLKOP=ClockSignal("shift"), o_CLKOS=ClockSignal("sync"), o_LOCK=locked)
         m.submodules.sync_reset = ResetSynchronizer(~locked, domain="sync")
         m.submodules.shift_reset = ResetSynchronizer(~locked, domain="shift")
 

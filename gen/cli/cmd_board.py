@@ -107,8 +107,8 @@ def run(args):
 
 
 def _verify(params, left, right, timing, frame):
-    print(f"simulating the board top under Verilator (a first build takes a few minutes) "
-          f"...", file=sys.stderr, flush=True)
+    print("simulating the board top under Verilator (a first build takes a few minutes) ...",
+          file=sys.stderr, flush=True)
     capture, _ = capture_verilator(DepthDisplay(params, left, right, timing), timing)
     return compare(frame, capture, timing)
 
