@@ -2,7 +2,7 @@
 
 The default board design of ``npstereo board ulx3s-85f`` (census 9x9, D = 32, R = 4, the
 synthetic scene, 160 x 120 shown 4x) from reset through the first disparity map to the end
-of the first whole video frame after it (about 500,000 pixel clocks), compared pixel for
+of the first whole video frame after it (812,000 pixel clocks), compared pixel for
 pixel with the golden model's colour-mapped map; then the broken variant (the colour ROM
 shifted by one disparity), which must fail. Prints build and simulation times. The
 bitstream itself is ``make board`` (place and route takes minutes).

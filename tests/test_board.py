@@ -194,3 +194,23 @@ def test_out_into_a_file_and_half_a_pair_are_refused(tmp_path, capsys):
     _refused(capsys, ["board", "ulx3s-85f", "--left", left, "--out", str(tmp_path / "o")],
              "--left and --right")
     assert a_file.read_text() == "x" and not (tmp_path / "o").exists()
+
+
+def test_ulx3s_top_drives_the_gpdi_pins_through_the_pll_and_ddr_registers(small_board):
+    """amaranth-boards' ULX3S platform: the three TMDS data pairs and the clock pair on the
+    GPDI pins as LVCMOS33D, each through an ODDRX1F, the clocks from one EHXPLLL fed by
+    the 25 MHz oscillator (G2), whose constraint nextpnr carries through the PLL."""
+    from amaranth_boards.ulx3s import ULX3S_85F_Platform
+
+    from npstereo.gen.board.ulx3s import ULX3STop
+    params, left, right, _ = small_board
+    plan = ULX3S_85F_Platform().prepare(
+        ULX3STop(DepthDisplay(params, left, right, SMALL_TIMING)), name="top")
+    lpf, rtlil = plan.files["top.lpf"], plan.files["top.il"]
+    for port, site in (("hdmi_0__d__p[0]", "A16"), ("hdmi_0__d__p[1]", "A14"),
+                       ("hdmi_0__d__p[2]", "A12"), ("hdmi_0__clk__p", "A17")):
+        assert f'LOCATE COMP "{port}" SITE "{site}";' in lpf
+        assert f'IOBUF PORT "{port}" IO_TYPE=LVCMOS33D' in lpf
+    assert 'LOCATE COMP "clk25_0__io" SITE "G2";' in lpf
+    assert 'FREQUENCY PORT "clk25_0__io" 25000000.0 HZ;' in lpf
+    assert rtlil.count("cell \\ODDRX1F") == 4 and rtlil.count("cell \\EHXPLLL") == 1

@@ -13,7 +13,7 @@ set), chosen when the bitstream is built.
 """
 
 from amaranth.hdl import ClockDomain, ClockSignal, Instance, Module, Signal
-from amaranth.lib import wiring
+from amaranth.lib import io, wiring
 from amaranth.lib.cdc import ResetSynchronizer
 
 from .tmds import Serialiser, TMDSEncoder
@@ -44,7 +44,7 @@ class ULX3STop(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        clk25 = platform.request("clk25", 0)
+        m.submodules.clk25 = clk25 = io.Buffer("i", platform.request("clk25", 0, dir="-"))
         m.domains.sync = ClockDomain("sync")
         m.domains.shift = ClockDomain("shift")
         locked = Signal()
@@ -71,6 +71,8 @@ class ULX3STop(wiring.Component):
             if name == "blue":
                 m.d.comb += [encoder.c0.eq(display.hsync), encoder.c1.eq(display.vsync)]
 
-        leds = [platform.request("led", i) for i in range(2)]
-        m.d.comb += [leds[0].o.eq(display.map_ready), leds[1].o.eq(locked)]
+        for index, lit in enumerate((display.map_ready, locked)):
+            led = m.submodules[f"led_{index}"] = io.Buffer("o", platform.request("led", index,
+                                                                                 dir="-"))
+            m.d.comb += led.o.eq(lit)
         return m
