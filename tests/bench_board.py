@@ -46,7 +46,7 @@ def main():
         capture, build_seconds = capture_verilator(
             DepthDisplay(params, left, right, timing, colours), timing)
         check = compare(expected, capture, timing)
-        print(f"{label}: {params.describe()} {width}x{height} on {timing.h_active}x"
+        print(f"{label}: {params.describe()} on {timing.h_active}x"
               f"{timing.v_active}: build {build_seconds:.1f} s, simulation "
               f"{capture.seconds:.1f} s, total {time.perf_counter() - start:.1f} s; "
               f"{check.message()}")
