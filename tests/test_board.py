@@ -4,6 +4,7 @@ tests/bench_board.py), the TMDS encoder against the DVI specification's decoding
 the inputs the command refuses.
 """
 
+import json
 import random
 
 import numpy as np
@@ -214,3 +215,28 @@ def test_ulx3s_top_drives_the_gpdi_pins_through_the_pll_and_ddr_registers(small_
     assert 'LOCATE COMP "clk25_0__io" SITE "G2";' in lpf
     assert 'FREQUENCY PORT "clk25_0__io" 25000000.0 HZ;' in lpf
     assert rtlil.count("cell \\ODDRX1F") == 4 and rtlil.count("cell \\EHXPLLL") == 1
+
+
+def test_a_path_between_the_clocks_is_held_to_the_faster_period(tmp_path):
+    """nextpnr checks each clock against its own constraint; the path from the pixel
+    clock to the serialiser's is held here to 8 ns (125 MHz). Broken variant: the same
+    report with that path at 9 ns is over its budget."""
+    from npstereo.gen.board.flow import clock_report
+
+    def report(delay):
+        path = tmp_path / f"report-{delay}.json"
+        path.write_text(json.dumps({
+            "fmax": {"pixel": {"achieved": 77.6, "constraint": 25.0},
+                     "shift": {"achieved": 272.5, "constraint": 125.0}},
+            "critical_paths": [
+                {"from": "posedge pixel", "to": "posedge pixel", "path": [{"delay": 12.0}]},
+                {"from": "posedge pixel", "to": "<async>", "path": [{"delay": 7.0}]},
+                {"from": "posedge pixel", "to": "posedge shift",
+                 "path": [{"delay": delay / 2}, {"delay": delay / 2}]}]}))
+        return clock_report(path)
+
+    clocks, crossings = report(1.7)
+    assert clocks == [("pixel", 77.6, 25.0), ("shift", 272.5, 125.0)]
+    assert crossings == [("pixel", "shift", 1.7, 8.0)]
+    (_, _, delay, budget), = report(9.0)[1]
+    assert delay > budget

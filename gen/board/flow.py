@@ -84,7 +84,22 @@ def build_bitstream(platform, top, folder, device_option, timeout=None, seed=1):
 
 
 def clock_report(report_path):
-    """``[(clock net, achieved MHz, constraint MHz)]`` from nextpnr's ``--report``."""
+    """From nextpnr's ``--report``: ``[(clock net, achieved MHz, constraint MHz)]`` and
+    the longest path between each two clocks, ``[(from, to, ns, budget ns)]``.
+
+    nextpnr checks each clock against its own constraint only. The clocks here come from
+    one PLL in phase, so a path from one to another has the period of the faster (the
+    destination's next edge after the launch): its budget."""
     report = json.loads(Path(report_path).read_text())
-    return [(name, float(figures["achieved"]), float(figures["constraint"]))
-            for name, figures in sorted(report.get("fmax", {}).items())]
+    fmax = report.get("fmax", {})
+    clocks = [(name, float(figures["achieved"]), float(figures["constraint"]))
+              for name, figures in sorted(fmax.items())]
+    crossings = []
+    for path in report.get("critical_paths", []):
+        source, target = (path[end].removeprefix("posedge ") for end in ("from", "to"))
+        if source != target and source in fmax and target in fmax:
+            budget = 1e3 / max(float(fmax[source]["constraint"]),
+                               float(fmax[target]["constraint"]))
+            crossings.append((source, target, sum(step["delay"] for step in path["path"]),
+                              budget))
+    return clocks, crossings

@@ -21,7 +21,7 @@ from ...params import UserError
 from ..atomic import write_bytes, write_text
 from ..board.display import DepthDisplay
 from ..board.fit import BOARDS, check_fit
-from ..board.flow import NAME, build_bitstream, clock_report
+from ..board.flow import NAME, BuildError, build_bitstream, clock_report
 from ..board.ulx3s import ULX3STop
 from ..board.verify import capture_verilator, compare
 from ..board.video import VGA_640X480, expected_frame
@@ -89,15 +89,21 @@ def run(args):
     platform = ULX3S_85F_Platform()
     seconds = build_bitstream(platform, ULX3STop(DepthDisplay(params, left, right, timing)),
                               work, board.nextpnr, timeout=args.timeout)
-    clocks = clock_report(work / "report.json")
+    clocks, crossings = clock_report(work / "report.json")
     lines = [f"{board.name}: {params.describe()} on {name} ({width}x{height})",
              f"yosys {seconds['yosys']:.0f} s, nextpnr {seconds['nextpnr']:.0f} s, "
              f"ecppack {seconds['ecppack']:.0f} s",
-             "clock                          achieved MHz  constraint MHz"]
-    lines += [f"{clock:<30} {achieved:12.2f}  {constraint:14.2f}"
+             f"{'clock':<36} {'achieved MHz':>12} {'constraint MHz':>15}"]
+    lines += [f"{clock:<36} {achieved:12.2f} {constraint:15.2f}"
               for clock, achieved, constraint in clocks]
+    lines += [f"{source} -> {target}: {delay:.2f} ns (budget {budget:.2f} ns)"
+              for source, target, delay, budget in crossings]
     lines.append(f"nextpnr log: {work / 'nextpnr.log'}")
+    late = [f"{s} -> {t} {d:.2f} ns" for s, t, d, b in crossings if d > b]
     write_text(out / "timing.txt", "\n".join(lines) + "\n")
+    if late:
+        raise BuildError(f"a path between the clocks is longer than the faster clock's "
+                         f"period: {', '.join(late)} ({out / 'timing.txt'})")
     write_bytes(out / f"{board.name}.bit", (work / f"{NAME}.bit").read_bytes())
     shutil.copyfile(work / "report.json", out / "nextpnr-report.json")
     print("\n".join(lines[1:-1]))
