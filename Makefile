@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 DATASET ?= ../shared/datasets/middlebury2003/teddy
 JOBS ?= 2
 
-.PHONY: all demo test bench icarus clean
+.PHONY: all demo test bench board icarus clean
 
 all: test
 
@@ -34,6 +34,10 @@ test: $(STAMP) icarus
 
 bench: $(STAMP) icarus
 	@for b in tests/bench_*.py; do $(PY) $$b --dataset "$(DATASET)" || exit $$?; done
+
+# The ULX3S bitstream (npstereo board; place and route takes minutes, single-threaded).
+board: $(STAMP)
+	$(VENV)/bin/npstereo board ulx3s-85f --out build/board-ulx3s-85f
 
 clean:
 	rm -rf build .pytest_cache

@@ -61,6 +61,7 @@ def _argv(command, tmp_path):
         "explore": ([command, "--synthetic", "--transform", "census", *small[:2],
                      "--disparities", "8", "--width", "32", "--height", "8", "--device",
                      "ecp5-25k"], [("--out", None)]),
+        "board": ([command, "ulx3s-85f", *small], [("--out", None)]),
     }[command]
 
 

@@ -46,7 +46,7 @@ def aggregation_value(text):
 
 
 def add_matching_arguments(parser, many=False, max_block=None, max_disparities=None,
-                           positionals=False):
+                           positionals=False, defaults=None):
     """Options of the matching pipeline; with ``many``, transform, block and aggregation
     take lists (a grid of configurations).
 
@@ -58,9 +58,13 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
 
     ``max_block``, ``max_disparities``: the limits of a command that generates hardware
     (:mod:`npstereo.hdl.plan`), named in the help; the golden model has none.
+    ``defaults``: a command's own defaults of ``disparities`` and ``rounds`` (in the help
+    too), instead of :data:`STEREO_DEFAULTS`'.
     """
     count = "+" if many else None
     transform, block = STEREO_DEFAULTS["transform"], STEREO_DEFAULTS["block"]
+    disparities = (defaults or {}).get("disparities", STEREO_DEFAULTS["disparities"])
+    rounds = (defaults or {}).get("rounds", STEREO_DEFAULTS["rounds"])
     parser.add_argument("--transform", nargs=count, choices=TRANSFORMS,
                         default=[transform] if many else transform,
                         help=f"non-parametric transform (default {transform})")
@@ -68,13 +72,13 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
                         help="transform window size B, odd >= 3"
                              + (f", at most {max_block}" if max_block else "")
                              + f" (default {block})")
-    parser.add_argument("--disparities", type=int, default=STEREO_DEFAULTS["disparities"],
+    parser.add_argument("--disparities", type=int, default=disparities,
                         help="disparity range D >= 2"
                              + (f", at most {max_disparities}" if max_disparities else "")
-                             + f" (default {STEREO_DEFAULTS['disparities']}, as in the paper)")
-    parser.add_argument("--rounds", type=int, default=STEREO_DEFAULTS["rounds"],
-                        help=f"calculation rounds R, must divide D "
-                             f"(default {STEREO_DEFAULTS['rounds']})")
+                             + f" (default {disparities}"
+                             + (", as in the paper)" if defaults is None else ")"))
+    parser.add_argument("--rounds", type=int, default=rounds,
+                        help=f"calculation rounds R, must divide D (default {rounds})")
     parser.add_argument("--aggregation", type=aggregation_value, metavar="A|sgm",
                         nargs=None if positionals else "+",
                         action="append" if positionals else "extend",

@@ -31,6 +31,7 @@ COMMANDS = {
     "cosim": "co-simulate the generated core on one frame, bit for bit",
     "report": "FPGA resources and clock of a core (Yosys, nextpnr)",
     "explore": "quality x logic x memory x clock of a grid for one device (Dask)",
+    "board": "a bitstream that shows the disparity map on a board's HDMI port",
 }
 
 
