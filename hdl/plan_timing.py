@@ -19,7 +19,8 @@ from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
-           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages", "sgm_tree_clocks", "SgmTiming",
+           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages",
+           "sgm_left_read_registered", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
@@ -184,6 +185,14 @@ def sgm_left_stages(rounds):
     multiplexer (the choice and the 11-bit addition were 9.6 ns in one clock,
     docs/sgm/lane_loop_probe.py)."""
     return min(max(rounds - 1, 1), 3)
+
+
+def sgm_left_read_registered(rounds):
+    """The left path's store read a clock early into a register (from R = 5, where the
+    update's three clocks leave one of the R - 1): the round counter, the LUT RAM's read
+    and the + P1 in front of the comparisons were census 7x7 SGM's critical path at
+    R = 10 (9.44 ns, 106 MHz)."""
+    return sgm_left_stages(rounds) + 1 <= rounds - 1
 
 
 def sgm_tree_clocks(units):

@@ -42,6 +42,7 @@ from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import Store, bits_for, register, taps
+from .plan_timing import sgm_left_read_registered
 from .trees import build_tree, register_plan
 
 __all__ = ["left_path"]
@@ -191,7 +192,11 @@ def left_path(owner, m, fresh, p2):
 
     # The loop: Lu(x - 1, .) of round j from the store at ``loop`` + j.
     store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
-    word = store.read(slots.round(loop))
+    early_read = sgm_left_read_registered(rounds)
+    if early_read:
+        word = register(m, store.read(slots.round(loop - 1)), units * bits, "sgm_left_word")
+    else:
+        word = store.read(slots.round(loop))
     centre = [word[i * bits:(i + 1) * bits] for i in range(units)]
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
@@ -208,7 +213,11 @@ def left_path(owner, m, fresh, p2):
                               "sgm_left_last_round")
         firsts = Store(m, "sgm_left_firsts", unsigned(bits), rounds)
         # The round counter of a clock earlier reads j + 1 (mod R) in round j.
-        following = firsts.read(slots.round(loop - 1))
+        if early_read:
+            following = register(m, firsts.read(slots.round(loop - 2)), bits,
+                                 "sgm_left_following")
+        else:
+            following = firsts.read(slots.round(loop - 1))
         below = Mux(first_round, plus[0], before)
         above = Mux(last_round, plus[units - 1], following)
     else:
