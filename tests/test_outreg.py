@@ -16,12 +16,13 @@ from pathlib import Path
 
 import pytest
 
+import npstereo.gen.flow
 from npstereo.gen.flow import bram_output_register as outreg
 from npstereo.gen.flow.synthesise import synthesise
 from npstereo.gen.flow.yosys import run_yosys
 from npstereo.sim.tools import require
 
-MODEL = Path(__file__).with_name("ecp5_dp16kd_model.v")
+MODEL = Path(npstereo.gen.flow.__file__).with_name("ecp5_dp16kd.v")
 
 #: A 16-bit memory (DP16KD at width 18): read enable on the array, its own enable on the
 #: data register, then logic, as the core's line buffers are built.
