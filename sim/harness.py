@@ -69,11 +69,11 @@ def harness_verilog(params, idle=0.0, backpressure=0.0, seed=1):
 `timescale 1ns/1ps
 module {HARNESS_TOP} (
     input  wire        dump /*verilator public_flat_rw*/,
-    output reg         done = 1'b0 /*verilator public_flat_rw*/,
-    output reg  [31:0] sent = 32'd0 /*verilator public_flat_rw*/,
-    output reg  [31:0] received = 32'd0 /*verilator public_flat_rw*/,
-    output reg  [31:0] first_in = 32'd0 /*verilator public_flat_rw*/,
-    output reg  [31:0] last_out = 32'd0 /*verilator public_flat_rw*/
+    output reg         done /*verilator public_flat_rw*/ = 1'b0,
+    output reg  [31:0] sent /*verilator public_flat_rw*/ = 32'd0,
+    output reg  [31:0] received /*verilator public_flat_rw*/ = 32'd0,
+    output reg  [31:0] first_in /*verilator public_flat_rw*/ = 32'd0,
+    output reg  [31:0] last_out /*verilator public_flat_rw*/ = 32'd0
 );
     localparam PIXELS = {pixels};
     localparam WIDTH = {params.width};

@@ -27,7 +27,8 @@ from .synthesise import synthesise
 from .tools import tool_versions
 from .yosys import run_yosys
 
-__all__ = ["NetlistError", "Netlist", "mapped_netlist", "default_netlist_root"]
+__all__ = ["NetlistError", "Netlist", "mapped_netlist", "netlist_verilog",
+           "default_netlist_root"]
 
 #: What the flow hands on after synthesis (and, for the ECP5, packing).
 _FLOW_OUTPUT = {"ecp5": "netlist.json", "cyclonev": "synth.json"}
@@ -73,6 +74,19 @@ def _key(family, verilog, outreg):
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def netlist_verilog(source):
+    """A Yosys JSON netlist (``source``) as Verilog text, written by Yosys itself
+    (``write_verilog``) into ``<source>.v`` next to it."""
+    source = Path(source)
+    target = source.with_suffix(".v")
+    failure = run_yosys(f"read_json {source.name}\nwrite_verilog -noattr {target.name}\n",
+                        source.parent, name=f"write_{source.stem}")
+    if failure is not None:
+        raise NetlistError(f"writing {source.name} as Verilog failed: {failure}; see "
+                           f"{source.parent / f'write_{source.stem}.log'}")
+    return target.read_text()
+
+
 def mapped_netlist(verilog, family, top, build_root=None, outreg=True, timeout=None):
     """Synthesise ``verilog`` for ``family`` with the project's flow; the netlist as Verilog.
 
@@ -109,14 +123,9 @@ def mapped_netlist(verilog, family, top, build_root=None, outreg=True, timeout=N
         if result["status"] != "ok":
             raise NetlistError(f"synthesis for {family} {result['status']}: "
                                f"{result['message']}; see {synth / 'yosys.log'}")
-        failure = run_yosys(f"read_json {_FLOW_OUTPUT[family]}\n"
-                            "write_verilog -noattr mapped.v\n", synth, name="write_netlist")
-        if failure is not None:
-            raise NetlistError(f"writing the {family} netlist failed: {failure}; "
-                               f"see {synth / 'write_netlist.log'}")
+        text = netlist_verilog(synth / _FLOW_OUTPUT[family])
         figures = {name: result.get(name) for name in _KEPT}
         write_text(directory / "figures.json", json.dumps(figures))
-        text = (synth / "mapped.v").read_text()
         write_text(done, text)
         return Netlist(family, text, libraries, figures, directory,
                        time.perf_counter() - start)
