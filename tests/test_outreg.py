@@ -112,7 +112,9 @@ def _testbench(ports, cycles, seed):
         words = (width + 31) // 32
         value = ", ".join(["$random(seed)"] * words)
         lines.append(f"      {name} = {{{value}}};")
-    lines += ["      if (we && ra == wa) ra = ra + 1;", "      #5 clk = 1; #5 clk = 0;"]
+    if {"we", "ra", "wa"} <= {name for name, _ in inputs}:
+        lines.append("      if (we && ra == wa) ra = ra + 1;")
+    lines.append("      #5 clk = 1; #5 clk = 0;")
     for name, _ in outputs:
         lines += [f"      if ({name}_rtl !== {name}_net) begin",
                   "        errors = errors + 1;",
