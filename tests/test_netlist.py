@@ -17,6 +17,7 @@ left without ``OUTREG`` while its flip-flops are removed) must fail the comparis
 
 import pytest
 
+from npstereo.gen.cli.main import main
 from npstereo.gen.flow import bram_output_register as outreg
 from npstereo.gen.flow.netlist import mapped_netlist, netlist_verilog
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
@@ -94,3 +95,34 @@ def test_register_dropping_pass_fails(tmp_path, monkeypatch):
     assert report["packed"] == netlist.figures["outreg_packed"] >= 1
     result = run(params, netlist_verilog(broken), netlist.libraries, plan=False)
     assert not result.ok and result.mismatches > 0
+
+
+# npstereo cosim --netlist --------------------------------------------------------------
+
+#: The census configuration of :data:`CONFIGS` (its netlist is cached once built).
+SMALL = ["--disparities", "4", "--block", "3", "--rounds", "1", "--lr-threshold", "1",
+         "--crop", f"{WIDTH}x{HEIGHT}"]
+
+
+def test_cli_netlist_bit_exact(tmp_path, capsys, pair_files):
+    scene = pair_files[2]
+    assert main(["cosim", "--simulator", "icarus", "--netlist", "ecp5", "--dataset",
+                 str(scene), *SMALL, "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert f"pixels compared:  {WIDTH * HEIGHT}" in out
+    assert "mismatches:       0 (bit-exact)" in out
+    assert "netlist:          ecp5: " in out and "DP16KD output registers packed" in out
+    assert (tmp_path / "out" / "hardware.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--simulator", "icarus", "--netlist", "xilinx"],
+     "argument --netlist: invalid choice: 'xilinx' (choose from 'ecp5', 'cyclonev')"),
+    (["--simulator", "amaranth", "--netlist", "ecp5"],
+     "--netlist needs --simulator verilator or icarus"),
+])
+def test_cli_netlist_bad_input(tmp_path, capsys, args, message):
+    assert main(["cosim", *args, "--synthetic", *SMALL, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
