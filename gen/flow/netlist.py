@@ -8,9 +8,9 @@ write the netlist that flow hands on (``netlist.json`` for the ECP5, what nextpn
 :mod:`.cell_models`, that is a gate-level model of what reaches the device.
 
 Synthesis takes seconds to minutes, so netlists are cached like simulation models:
-``build/netlist/<hash>/``, the hash covering the family, the core's Verilog, the tool
-versions (:func:`.tools.tool_versions`, the flow's version among them) and the source of
-the packing pass, behind a file lock for parallel test workers.
+``build/netlist/<hash>/``, the hash covering the family, the core's Verilog, the Yosys
+script, the tool versions (:func:`.tools.tool_versions`, the flow's version among them)
+and the source of the packing pass, behind a file lock for parallel test workers.
 """
 
 import hashlib
@@ -25,7 +25,7 @@ from . import bram_output_register
 from .cell_models import cell_library
 from .synthesise import synthesise
 from .tools import tool_versions
-from .yosys import run_yosys
+from .yosys import run_yosys, synthesis_script
 
 __all__ = ["NetlistError", "Netlist", "mapped_netlist", "netlist_verilog",
            "default_netlist_root"]
@@ -68,9 +68,11 @@ def default_netlist_root():
     return Path.cwd() / "build" / "netlist"
 
 
-def _key(family, verilog, outreg):
+def _key(family, verilog, top, outreg):
+    # The script and the pass as they are now, so that an edit re-synthesises.
     packing = Path(bram_output_register.__file__).read_text()
-    text = json.dumps([family, verilog, tool_versions(), outreg, packing])
+    text = json.dumps([family, verilog, top, synthesis_script(family, top), tool_versions(),
+                       outreg, packing])
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -111,7 +113,7 @@ def mapped_netlist(verilog, family, top, build_root=None, outreg=True, timeout=N
     """
     libraries = cell_library(family)
     root = Path(build_root or default_netlist_root())
-    directory = root / _key(family, verilog, outreg)
+    directory = root / _key(family, verilog, top, outreg)
     done = directory / "netlist.v"
     with locked(directory / ".lock"):
         if done.exists():
