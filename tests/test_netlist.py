@@ -7,9 +7,9 @@ project's DP16KD). Census on the ECP5 runs under the stress of the RTL co-simula
 (cocotbext-axi: random idle cycles and backpressure, a reset in the middle of a frame,
 then a frame that must be exact); the other configurations run one frame through the
 Verilog harness with random idle cycles and backpressure (no Python per clock: the
-suite's budget). Every output pixel is compared with the golden model. Frames are 16 x 6 (a gate-level core runs
-a few hundred clocks per second under Icarus); netlists are cached in ``build/netlist``
-and simulation models in ``build/cosim``.
+suite's budget). Every output pixel is compared with the golden model. Frames are 16 x 6
+(a gate-level core runs a few hundred clocks per second under Icarus); netlists are cached
+in ``build/netlist`` and simulation models in ``build/cosim``.
 
 Broken variant: the output-register pass dropping the registers it packs (the DP16KD
 left without ``OUTREG`` while its flip-flops are removed) must fail the comparison.
