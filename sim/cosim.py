@@ -143,7 +143,7 @@ def _quiet_cycles(params):
 
 
 def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_root=None,
-               optimize=False):
+               optimize=False, libraries=None):
     """Drive ``npstereo_core`` with cocotbext-axi through a list of plan steps.
 
     Parameters
@@ -165,6 +165,9 @@ def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_r
         Verilog of the core; generated from ``params`` when omitted.
     optimize : bool
         See :func:`.build.build`; cocotbext-axi, not the model, limits the speed here.
+    libraries : dict, optional
+        File name -> Verilog of further sources: the cell models of a gate-level
+        ``core_text`` (a mapped netlist with the core's ports).
 
     Returns
     -------
@@ -172,7 +175,8 @@ def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_r
         One comparison per checked frame.
     """
     core_text = core_verilog(params) if core_text is None else core_text
-    model = build(simulator, {"core.v": core_text}, TOP_NAME, build_root, optimize)
+    model = build(simulator, {"core.v": core_text, **(libraries or {})}, TOP_NAME,
+                  build_root, optimize)
     arrays = {}
     for index, (left, right) in enumerate(frames):
         arrays[f"in{index}"], arrays[f"out{index}"] = golden_words(left, right, params)
@@ -182,7 +186,7 @@ def run_stream(simulator, params, frames, steps, core_text=None, seed=1, build_r
 
 
 def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpressure=0.0,
-              progress=None, build_root=None, golden=None, optimize=True):
+              progress=None, build_root=None, golden=None, optimize=True, libraries=None):
     """One whole frame through the simulated core, compared with the golden map.
 
     Under Verilator and Icarus the frame runs through the Verilog harness of
@@ -208,6 +212,8 @@ def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpres
         The golden map of the frame; computed when omitted.
     optimize : bool
         See :func:`.build.build`.
+    libraries : dict, optional
+        Cell models of a gate-level ``core_text``, as for :func:`run_stream`.
 
     Returns
     -------
@@ -228,7 +234,8 @@ def run_frame(simulator, params, left, right, core_text=None, idle=0.0, backpres
         return RunResult([("frame 0", comparison)], cycles, time.perf_counter() - start,
                          disparity=decode_map(data, params))
     core_text = core_verilog(params) if core_text is None else core_text
-    sources = {"core.v": core_text, "harness.v": harness_verilog(params, idle, backpressure)}
+    sources = {"core.v": core_text, **(libraries or {}),
+               "harness.v": harness_verilog(params, idle, backpressure)}
     model = build(simulator, sources, HARNESS_TOP, build_root, optimize, harness=True)
     pixels = params.width * params.height
     # Generous: R cycles per pixel, random traffic, and a few lines of latency.

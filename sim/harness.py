@@ -69,11 +69,11 @@ def harness_verilog(params, idle=0.0, backpressure=0.0, seed=1):
 `timescale 1ns/1ps
 module {HARNESS_TOP} (
     input  wire        dump /*verilator public_flat_rw*/,
-    output reg         done /*verilator public_flat_rw*/,
-    output reg  [31:0] sent /*verilator public_flat_rw*/,
-    output reg  [31:0] received /*verilator public_flat_rw*/,
-    output reg  [31:0] first_in /*verilator public_flat_rw*/,
-    output reg  [31:0] last_out /*verilator public_flat_rw*/
+    output reg         done /*verilator public_flat_rw*/ = 1'b0,
+    output reg  [31:0] sent /*verilator public_flat_rw*/ = 32'd0,
+    output reg  [31:0] received /*verilator public_flat_rw*/ = 32'd0,
+    output reg  [31:0] first_in /*verilator public_flat_rw*/ = 32'd0,
+    output reg  [31:0] last_out /*verilator public_flat_rw*/ = 32'd0
 );
     localparam PIXELS = {pixels};
     localparam WIDTH = {params.width};
@@ -91,11 +91,14 @@ module {HARNESS_TOP} (
     reg [{codec.beat.size - 1}:0] resp [0:PIXELS-1];
     initial $readmemh("stim.hex", stim);
 
-    reg [31:0] rng;
-    reg [31:0] cycle;
-    reg [31:0] col;
-    reg        s_valid;
-    reg        dumped;
+    // Initialised, not only reset: the core's inputs are then defined from time 0. A
+    // gate-level core (npstereo cosim --netlist) under Icarus otherwise catches X in
+    // registers whose enable depends on their own value, as no real device would.
+    reg [31:0] rng = 32'd{seed or 1};
+    reg [31:0] cycle = 32'd0;
+    reg [31:0] col = 32'd0;
+    reg        s_valid = 1'b0;
+    reg        dumped = 1'b0;
     wire       s_ready;
     wire [{out_bits - 1}:0] m_data;
     wire       m_valid, m_user, m_last;

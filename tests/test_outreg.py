@@ -1,27 +1,28 @@
 """ECP5 block-RAM output-register packing (``npstereo.gen.flow.bram_output_register``): proved by simulation.
 
 Each design is synthesised for ECP5, packed, written back to Verilog by Yosys and simulated
-with Icarus against its RTL on random stimulus, cycle by cycle. Yosys's own DP16KD model is
-an empty module, so the block RAM is simulated by ``tests/ecp5_dp16kd_model.v`` (Lattice's
-REGMODE/OCE semantics); the unpacked netlist is simulated too, so a wrong model shows up as
-a mismatch before packing, not as a wrong verdict about the packing. A deliberately broken
+with Icarus against its RTL on random stimulus, cycle by cycle, with the cell models of
+``npstereo cosim --netlist ecp5``. Yosys's own DP16KD model is an empty module, so the block
+RAM is simulated by the project's model (``gen/flow/ecp5_dp16kd.v``, Lattice's REGMODE/OCE
+semantics; tests/test_dp16kd_model.py checks it); the unpacked netlist is simulated too, so
+a wrong model shows up as a mismatch before packing, not as a wrong verdict about the
+packing. A deliberately broken
 packing (registers with different enables merged onto one OCE) must fail the comparison.
 """
 
 import json
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from npstereo.gen.flow import bram_output_register as outreg
+from npstereo.gen.flow.cell_models import cell_library
 from npstereo.gen.flow.synthesise import synthesise
 from npstereo.gen.flow.yosys import run_yosys
 from npstereo.sim.tools import require
 
-MODEL = Path(__file__).with_name("ecp5_dp16kd_model.v")
 
 #: A 16-bit memory (DP16KD at width 18): read enable on the array, its own enable on the
 #: data register, then logic, as the core's line buffers are built.
@@ -87,35 +88,6 @@ def _netlist_verilog(folder, netlist, name):
     return Path(folder) / f"{name}.v"
 
 
-def _cell_library(folder):
-    """Yosys's ECP5 cell models as one file Icarus 11 reads, without the empty DP16KD.
-
-    ``cells_sim_ecp5.v`` includes ``cells_ff.vh`` twice (directly and through
-    ``common_sim.vh``) and has an elaboration-time ``$error`` in a generate branch our
-    netlists never take; Icarus 11 rejects both, so the includes are inlined once and the
-    ``$error`` call dropped. The DP16KD module is removed: ``ecp5_dp16kd_model.v``
-    replaces it.
-    """
-    import pyosys  # noqa: F401  (sets the location of the share folder it ships)
-    lattice = Path(sys._pyosys_share_dirname) / "lattice"
-    seen = set()
-
-    def inline(name):
-        if name in seen:
-            return ""
-        seen.add(name)
-        text = (lattice / name).read_text()
-        return re.sub(r'^`include "([^"]+)"', lambda m: inline(m.group(1)), text, flags=re.M)
-
-    text = inline("cells_sim_ecp5.v")
-    text, count = re.subn(r"module DP16KD\(.*?endmodule", "", text, flags=re.S)
-    assert count == 1
-    text = re.sub(r"\$error\([^;]*\);", "", text)
-    path = Path(folder) / "cells_sim_ecp5_for_icarus.v"
-    path.write_text(text)
-    return path
-
-
 def _testbench(ports, cycles, seed):
     """Random stimulus for both designs, outputs compared after every clock edge.
 
@@ -140,7 +112,9 @@ def _testbench(ports, cycles, seed):
         words = (width + 31) // 32
         value = ", ".join(["$random(seed)"] * words)
         lines.append(f"      {name} = {{{value}}};")
-    lines += ["      if (we && ra == wa) ra = ra + 1;", "      #5 clk = 1; #5 clk = 0;"]
+    if {"we", "ra", "wa"} <= {name for name, _ in inputs}:
+        lines.append("      if (we && ra == wa) ra = ra + 1;")
+    lines.append("      #5 clk = 1; #5 clk = 0;")
     for name, _ in outputs:
         lines += [f"      if ({name}_rtl !== {name}_net) begin",
                   "        errors = errors + 1;",
@@ -162,18 +136,26 @@ def _ports(verilog):
     return ports
 
 
-def simulate(verilog, netlist, folder, cycles=600, seed=7):
-    """Mismatching cycles between the RTL and a JSON netlist of it under random stimulus."""
+def simulate(verilog, netlist, folder, cycles=600, seed=7, model=None):
+    """Mismatching cycles between the RTL and a JSON netlist of it under random stimulus.
+
+    The cells are those of ``npstereo cosim --netlist ecp5`` (Yosys's ECP5 models and the
+    DP16KD model), or ``model`` (Verilog text) instead of the DP16KD model.
+    """
     folder = Path(folder)
     rtl = folder / "rtl.v"
     rtl.write_text(verilog.replace("module top(", "module rtl_top("))
     net = _netlist_verilog(folder, netlist, "net_top")
-    cells = _cell_library(folder)
+    libraries = cell_library("ecp5")
+    if model is not None:
+        libraries["dp16kd.v"] = model
+    for name, text in libraries.items():
+        (folder / name).write_text(text)
     tb = folder / "tb.v"
     tb.write_text(_testbench(_ports(verilog), cycles, seed))
     binary = folder / "sim.vvp"
     subprocess.run([require("iverilog"), "-g2012", "-o", str(binary),
-                    str(tb), str(rtl), str(net), str(cells), str(MODEL)],
+                    str(tb), str(rtl), str(net), *libraries],
                    check=True, capture_output=True, text=True, cwd=folder)
     run = subprocess.run([require("vvp"), "-n", str(binary)], check=True,
                          capture_output=True, text=True, cwd=folder)
