@@ -198,3 +198,18 @@ def record_memories(monkeypatch):
 
     monkeypatch.setattr(memory.Memory, "__init__", recording)
     return made
+
+
+def choose_bank_early(monkeypatch, suffix="_bank", clocks=None):
+    """Break :mod:`npstereo.hdl.banks`: the digits of the bank index whose register chain
+    ends in ``suffix`` arrive a clock early (``clocks`` registers instead of their own
+    count less one, or exactly ``clocks``), so words come from the bank of the next
+    address."""
+    from npstereo.hdl import banks
+    real_pipe = banks.pipe
+
+    def early(m, value, steps, name, reset=False):
+        if name.endswith(suffix):
+            steps = steps - 1 if clocks is None else clocks
+        return real_pipe(m, value, steps, name, reset)
+    monkeypatch.setattr(banks, "pipe", early)

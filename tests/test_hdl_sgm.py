@@ -22,14 +22,13 @@ from amaranth.hdl import Value
 from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
-from npstereo.hdl import banks as hdl_banks
 from npstereo.hdl import calculation_stage, plan, plan_memories, plan_structure, plan_timing
 from npstereo.hdl import sgm as hdl_sgm
 from npstereo.hdl import sgm_left
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
 from npstereo.params import ParameterError, StereoParams
 
-from hdl_helpers import RESET, check_frames, frame_beats, record_memories
+from hdl_helpers import RESET, check_frames, choose_bank_early, frame_beats, record_memories
 from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
@@ -242,11 +241,7 @@ def test_path_rows_in_banks_match_golden(monkeypatch, bank, levels):
 def test_broken_path_rows_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words from the bank of the next address."""
     monkeypatch.setattr(plan_structure, "COST_BANK", 32)
-    real_pipe = hdl_banks.pipe
-
-    def early(m, value, steps, name, reset=False):
-        return real_pipe(m, value, 1 if name.endswith("_bank") else steps, name, reset)
-    monkeypatch.setattr(hdl_banks, "pipe", early)
+    choose_bank_early(monkeypatch, "_bank", clocks=1)
     assert_stage_caught(monkeypatch)
 
 

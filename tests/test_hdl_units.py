@@ -18,7 +18,6 @@ from npstereo.golden import aggregation as golden_aggregation
 from npstereo.golden import matching_cost as golden_cost
 from npstereo.golden import transform as golden_transform
 from npstereo.hdl import aggregation as hdl_aggregation
-from npstereo.hdl import banks as hdl_banks
 from npstereo.hdl import matching_cost as hdl_cost
 from npstereo.hdl import plan_structure, plan_timing
 from npstereo.hdl import transform as hdl_transform
@@ -28,6 +27,7 @@ from npstereo.hdl.matching_cost import MatchingCost
 from npstereo.hdl.transform import Transform
 from npstereo.params import TRANSFORMS, StereoParams
 
+from hdl_helpers import choose_bank_early
 from hdl_trees import AdderTree, MinTree, PopCount
 
 
@@ -611,12 +611,7 @@ def test_aggregation_bank_choice_in_levels_matches_golden(monkeypatch, bank, lev
 def test_broken_aggregation_bank_choice_level_is_caught(monkeypatch):
     """The second level's digit a clock early: words from the group of the next address."""
     monkeypatch.setattr(plan_structure, "COST_BANK", 2)
-    real_pipe = hdl_banks.pipe
-
-    def early(m, value, steps, name, reset=False):
-        return real_pipe(m, value, steps - 1 if name.endswith("_bank1") else steps, name,
-                         reset)
-    monkeypatch.setattr(hdl_banks, "pipe", early)
+    choose_bank_early(monkeypatch, "_bank1")
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="costs"), seed=1)
@@ -625,11 +620,7 @@ def test_broken_aggregation_bank_choice_level_is_caught(monkeypatch):
 def test_broken_aggregation_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words come from the bank of the next address."""
     monkeypatch.setattr(plan_structure, "COST_BANK", 8)
-    real_pipe = hdl_banks.pipe
-
-    def early(m, value, steps, name, reset=False):
-        return real_pipe(m, value, 1 if name.endswith("_bank") else steps, name, reset)
-    monkeypatch.setattr(hdl_banks, "pipe", early)
+    choose_bank_early(monkeypatch, "_bank", clocks=1)
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="costs"), seed=1)
