@@ -28,6 +28,7 @@ COMMANDS = {
     "demo": "run everything on the embedded synthetic scene",
     "verilog": "generate the Verilog of a stereo core",
     "cosim": "co-simulate the generated core on one frame, bit for bit",
+    "prove": "prove the core's AXI4-Stream properties (SymbiYosys)",
     "report": "FPGA resources and clock of a core (Yosys, nextpnr)",
     "explore": "quality x logic x memory x clock of a grid for one device (Dask)",
 }
