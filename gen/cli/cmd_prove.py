@@ -5,7 +5,7 @@ import sys
 from ...hdl.plan import check_buildable
 from ...hdl.verilog import core_verilog
 from ..atomic import write_text
-from ..flow.formal import (DEFAULT_DEPTH, GROUPS, MAX_PROVE_BLOCK, MAX_PROVE_DISPARITIES,
+from ..flow.formal import (GROUPS, MAX_PROVE_BLOCK, MAX_PROVE_DISPARITIES,
                            MAX_PROVE_PIXELS, PROPERTIES, check_provable, prove)
 from ...params import UserError
 from .arguments import add_hardware_arguments, add_matching_arguments, check_output_folder, \
@@ -21,15 +21,17 @@ DESCRIPTION = ("Generate the core (npstereo_core, as npstereo verilog) and prove
                "decided.")
 
 #: Small by default: every clock of a bounded check is a copy of the core for the solver.
-DEFAULTS = {"block": 3, "disparities": 4, "rounds": 2}
+DEFAULTS = {"block": 3, "disparities": 2, "rounds": 1}
 
 
 def run(args):
     out = check_output_folder(args.out)
-    params = params_from_args(args).with_size(args.width, args.height)
+    base = params_from_args(args)
+    width = base.first_valid_column + 1 if args.width is None else args.width
+    params = base.with_size(width, args.height)
     check_buildable(params)
     check_provable(params)
-    if args.depth < 1:
+    if args.depth is not None and args.depth < 1:
         raise UserError(f"--depth must be >= 1, not {args.depth}")
     if args.timeout <= 0:
         raise UserError(f"--timeout must be > 0 seconds, not {args.timeout:g}")
@@ -56,12 +58,13 @@ def add_arguments(parser):
                            max_disparities=MAX_PROVE_DISPARITIES)
     add_hardware_arguments(parser)
     parser.set_defaults(**DEFAULTS)
-    parser.add_argument("--width", type=int, default=8,
-                        help=f"frame width W (default 8; W x H <= {MAX_PROVE_PIXELS})")
-    parser.add_argument("--height", type=int, default=4, help="frame height H (default 4)")
-    parser.add_argument("--depth", type=int, default=DEFAULT_DEPTH,
-                        help=f"clocks the bounded checks unroll (default {DEFAULT_DEPTH}; "
-                             "the solver's time grows steeply beyond ~40)")
+    parser.add_argument("--width", type=int, default=None,
+                        help=f"frame width W (default the smallest the configuration takes, "
+                             f"D + max(1, (A-1)/2); W x H <= {MAX_PROVE_PIXELS})")
+    parser.add_argument("--height", type=int, default=2, help="frame height H (default 2)")
+    parser.add_argument("--depth", type=int, default=None,
+                        help="clocks the bounded checks unroll (default: past the first line "
+                             "of output words; the solver's time grows steeply with it)")
     parser.add_argument("--timeout", type=float, default=120.0,
                         help="seconds per group of checks; a bounded check stopped by it is "
                              "bounded to the depth it reached (default 120)")

@@ -15,7 +15,9 @@ run in four groups, one ``.sby`` file each (one elaboration per group):
   tie the harness's counters to the core's credits and queues), and the SAT problems
   harden steeply once words come out (census 3x3 D=2 R=1 at 3x2, whose first word comes
   out 28 clocks after reset: depth 30 in 0.1 s, depth 44 in 5 minutes; smtbmc with Yices
-  was slower still), so the default depth stops just before that wall. The assertions that a whole frame came out need a whole frame, its
+  was slower still). The default depth reaches the first line of output words
+  (:func:`default_depth`); a time limit stops the solver and the verdict gives the depth
+  it reached, and says when no word can come out within it (a vacuous bound). The assertions that a whole frame came out need a whole frame, its
   flush and a quiet window (:func:`group_depth`), far beyond it: the verdict says
   "not reached" for them, and the simulations (tests/test_hdl_core.py) check them.
   Counterexample traces of a failed check are converted to VCD by ``yosys-smtbmc``,
@@ -40,7 +42,7 @@ from .processes import run_tool
 from .tools import find_tool
 
 __all__ = ["PROPERTIES", "GROUPS", "MAX_PROVE_BLOCK", "MAX_PROVE_DISPARITIES",
-           "MAX_PROVE_PIXELS", "DEFAULT_DEPTH", "check_provable", "Verdict", "group_depth", "prove"]
+           "MAX_PROVE_PIXELS", "check_provable", "first_word_clock", "default_depth", "Verdict", "group_depth", "prove"]
 
 HARNESS = Path(__file__).with_name("stream_properties.sv")
 
@@ -111,6 +113,19 @@ def quiet_clocks(params, group):
     if group == "misframed":
         clocks += params.width * params.height * params.rounds
     return clocks
+
+
+def first_word_clock(params):
+    """A lower bound of the clock at which the first output word can come out after a
+    reset: the flush's positions at R clocks each and the pipeline to the output
+    (measured: census 3x3 D=2 R=1 3x2 bound 21, first word at clock 27; census 3x3 D=4
+    R=2 5x2 bound 64, first word at 72). A bounded check shorter than this sees no word."""
+    return params.rounds * latency(params) + core_timing(params).output
+
+
+def default_depth(params):
+    """Depth of the bounded checks by default: past the first line of output words."""
+    return first_word_clock(params) + 2 * params.width * params.rounds + 8
 
 
 def group_depth(params, group):
@@ -263,16 +278,17 @@ def _failed(work, out, group, members):
             for p in members]
 
 
-#: Default depth of the bounded checks (see the module's docstring).
-DEFAULT_DEPTH = 36
-
-
 def _unreached(prop, params, depth):
-    """The note of a completion assertion that ``depth`` clocks cannot reach."""
+    """The note of an assertion that ``depth`` clocks cannot reach, or makes vacuous."""
     reach = group_depth(params, prop.group)
     if prop.name.endswith("_whole") and depth < reach:
         return f": not reached (a whole frame needs depth {reach})"
-    return ""
+    first = first_word_clock(params)
+    if prop.name == "misframe_flag":
+        return ""   # about framing_error, which needs no output word
+    if depth <= first:
+        return f": vacuous, no word comes out before clock {first}"
+    return f" (words from about clock {first})"
 
 
 def _bmc_reached(log):
@@ -284,15 +300,17 @@ def _bmc_reached(log):
     return int(frames[-1]) if frames else None
 
 
-def prove(core, params, out, depth=DEFAULT_DEPTH, timeout=None, groups=tuple(GROUPS),
+def prove(core, params, out, depth=None, timeout=None, groups=tuple(GROUPS),
           progress=None):
     """Prove every property of :data:`PROPERTIES` on the Verilog file ``core`` (module
     ``npstereo_core`` with the ports of ``params``), writing the .sby files, the logs and
-    any counterexample into ``out``. ``depth`` bounds the bounded checks; ``timeout`` is
+    any counterexample into ``out``. ``depth`` bounds the bounded checks (default
+    :func:`default_depth`); ``timeout`` is
     per group, in seconds (a bounded check stopped by it is bounded to the depth it
     reached); ``groups``: which of :data:`GROUPS` to run. Returns the verdicts in the
     order of :data:`PROPERTIES`."""
     out = Path(out)
+    depth = default_depth(params) if depth is None else depth
     verdicts = []
     for group in groups:
         if progress is not None:
