@@ -33,7 +33,7 @@ from npstereo.sim.cosim import run_frame
 #: Examples per run: a minute of Amaranth's simulator in ``make test``; ``make soak`` sets
 #: SOAK_EXAMPLES. The Verilator subset builds a model per example (ccache helps little
 #: across configurations): one in ``make test``.
-EXAMPLES = int(os.environ.get("SOAK_EXAMPLES", "20"))
+EXAMPLES = int(os.environ.get("SOAK_EXAMPLES", "14"))
 VERILATOR_EXAMPLES = int(os.environ.get("SOAK_VERILATOR_EXAMPLES", "1"))
 #: ``make soak`` draws new configurations each run unless SOAK_SEED fixes them.
 DERANDOMIZE = "SOAK_EXAMPLES" not in os.environ

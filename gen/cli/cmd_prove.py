@@ -1,5 +1,6 @@
 """``npstereo prove``: the core's AXI4-Stream properties, proved with SymbiYosys."""
 
+import re
 import sys
 
 from ...hdl.plan import check_buildable
@@ -58,6 +59,11 @@ def add_arguments(parser):
                            max_disparities=MAX_PROVE_DISPARITIES)
     add_hardware_arguments(parser)
     parser.set_defaults(**DEFAULTS)
+    # The shared options' help names StereoParams' defaults: name prove's own instead.
+    for action in parser._actions:
+        if action.dest in DEFAULTS and action.help:
+            action.help = re.sub(r"\(default [^)]*\)", f"(default {DEFAULTS[action.dest]})",
+                                 action.help)
     parser.add_argument("--width", type=int, default=None,
                         help=f"frame width W (default the smallest the configuration takes, "
                              f"D + max(1, (A-1)/2); W x H <= {MAX_PROVE_PIXELS})")
