@@ -71,12 +71,12 @@ module {TOP_NAME}(input clk, input rst, input [15:0] s_axis_tdata, input s_axis_
     output [{width - 1}:0] m_axis_tdata, output m_axis_tvalid, input m_axis_tready,
     output m_axis_tuser, output m_axis_tlast, output framing_error);
   wire [{width - 1}:0] tdata;
-  wire tvalid, tready, tlast;
+  wire tvalid, tready, tlast, tuser, error;
   {TOP_NAME}_inner inner(.clk(clk), .rst(rst), .s_axis_tdata(s_axis_tdata),
     .s_axis_tvalid(s_axis_tvalid), .s_axis_tready(s_axis_tready),
     .s_axis_tuser(s_axis_tuser), .s_axis_tlast(s_axis_tlast), .m_axis_tdata(tdata),
-    .m_axis_tvalid(tvalid), .m_axis_tready(tready), .m_axis_tuser(m_axis_tuser),
-    .m_axis_tlast(tlast), .framing_error(framing_error));
+    .m_axis_tvalid(tvalid), .m_axis_tready(tready), .m_axis_tuser(tuser),
+    .m_axis_tlast(tlast), .framing_error(error));
 {wrapper}
 endmodule
 """
@@ -84,21 +84,56 @@ endmodule
 
 #: tdata's bit 0 follows the input's tvalid, also while the sink stalls the word.
 TOGGLING_TDATA = """  assign m_axis_tdata = tdata ^ s_axis_tvalid;
-  assign m_axis_tvalid = tvalid, tready = m_axis_tready, m_axis_tlast = tlast;"""
+  assign m_axis_tvalid = tvalid, tready = m_axis_tready, m_axis_tlast = tlast;
+  assign m_axis_tuser = tuser, framing_error = error;"""
 
 #: Every line's last word is taken from the core and never offered.
 DROPPED_LAST = """  assign m_axis_tdata = tdata, m_axis_tlast = tlast;
   assign m_axis_tvalid = tvalid && !tlast;
-  assign tready = m_axis_tready || tlast;"""
+  assign tready = m_axis_tready || tlast;
+  assign m_axis_tuser = tuser, framing_error = error;"""
+
+#: The clock after a reset: what the next three wrappers misuse.
+FRESH = """  reg fresh;
+  always @(posedge clk) fresh <= rst;
+"""
+
+#: A word offered in the clock after a reset.
+VALID_AFTER_RESET = FRESH + """  assign m_axis_tdata = tdata, m_axis_tlast = tlast, framing_error = error;
+  assign m_axis_tuser = tuser;
+  assign m_axis_tvalid = tvalid || fresh;
+  assign tready = m_axis_tready;"""
+
+#: A word of its own (a start of frame) offered after every reset until taken: output
+#: without input.
+SPURIOUS_WORD = """  reg extra;
+  always @(posedge clk) extra <= rst ? 1'b1 : extra && !m_axis_tready;
+  assign m_axis_tdata = extra ? 0 : tdata;
+  assign m_axis_tvalid = extra || tvalid;
+  assign m_axis_tuser = extra || tuser;
+  assign m_axis_tlast = !extra && tlast;
+  assign framing_error = error;
+  assign tready = !extra && m_axis_tready;"""
+
+#: framing_error raised in the clock after a reset, with no input at all.
+SPURIOUS_ERROR = FRESH + """  assign m_axis_tdata = tdata, m_axis_tlast = tlast, m_axis_tvalid = tvalid;
+  assign m_axis_tuser = tuser;
+  assign tready = m_axis_tready;
+  assign framing_error = error || fresh;"""
 
 
-@pytest.mark.parametrize("wrapper,group,failing", [
-    (TOGGLING_TDATA, "induction", "hold"), (DROPPED_LAST, "free", "markers")])
-def test_broken_core_fails_with_a_trace(wrapper, group, failing, tmp_path):
+@pytest.mark.parametrize("wrapper,group,failing,depth", [
+    (TOGGLING_TDATA, "induction", "hold", 36), (VALID_AFTER_RESET, "induction", "reset", 6),
+    (DROPPED_LAST, "free", "markers", 36), (SPURIOUS_WORD, "free", "no_spurious", 6),
+    (SPURIOUS_WORD, "framed", "frame_count", 6),
+    (SPURIOUS_ERROR, "misframed", "misframe_flag", 6)])
+def test_broken_core_fails_with_a_trace(wrapper, group, failing, depth, tmp_path):
+    """Each property that a bounded depth reaches fails on a core broken for it (the two
+    completion properties, ``*_whole``, are beyond the depths the tests can afford)."""
     params = StereoParams(transform="census", **TINY)
     core = tmp_path / "broken.v"
     core.write_text(_broken_core(params, wrapper))
-    verdicts = prove(core, params, tmp_path, depth=36, timeout=60, groups=(group,))
+    verdicts = prove(core, params, tmp_path, depth=depth, timeout=60, groups=(group,))
     status = {v.name: v for v in verdicts}
     assert status[failing].status == "failed", status[failing]
     assert status[failing].trace is not None and status[failing].trace.stat().st_size > 0
