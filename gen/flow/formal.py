@@ -15,9 +15,11 @@ run in four groups, one ``.sby`` file each (one elaboration per group):
   tie the harness's counters to the core's credits and queues), and the SAT problems
   harden steeply once words come out (census 3x3 D=2 R=1 at 3x2, whose first word comes
   out 28 clocks after reset: depth 30 in 0.1 s, depth 44 in 5 minutes; smtbmc with Yices
-  was slower still). The default depth reaches the first line of output words
-  (:func:`default_depth`); a time limit stops the solver and the verdict gives the depth
-  it reached, and says when no word can come out within it (a vacuous bound). The assertions that a whole frame came out need a whole frame, its
+  was slower still) in the misframed group; the free and framed groups reach a whole
+  frame of the smallest cores in seconds. The default depth of a group reaches its
+  completion assertion (:func:`group_depth`); a time limit stops the solver and the
+  verdict gives the depth it reached, and says when no word can come out within it (a
+  vacuous bound). The assertions that a whole frame came out need a whole frame, its
   flush and a quiet window (:func:`group_depth`), far beyond it: the verdict says
   "not reached" for them, and the simulations (tests/test_hdl_core.py) check them.
   Counterexample traces of a failed check are converted to VCD by ``yosys-smtbmc``,
@@ -316,15 +318,20 @@ def prove(core, params, out, depth=None, timeout=None, groups=tuple(GROUPS),
     """Prove every property of :data:`PROPERTIES` on the Verilog file ``core`` (module
     ``npstereo_core`` with the ports of ``params``), writing the .sby files, the logs and
     any counterexample into ``out``. ``depth`` bounds the bounded checks (default
-    :func:`default_depth`); ``timeout`` is
+    :func:`group_depth`, at least :func:`default_depth`); ``timeout`` is
     per group, in seconds (a bounded check stopped by it is bounded to the depth it
     reached); ``groups``: which of :data:`GROUPS` to run. Returns the verdicts in the
     order of :data:`PROPERTIES`."""
     out = Path(out)
-    depth = default_depth(params) if depth is None else depth
     verdicts = []
     for group in groups:
+        chosen = depth
+        if chosen is None:
+            # Far enough for the completion assertion where there is one: the solver's
+            # time limit says how far it got.
+            chosen = default_depth(params) if GROUPS[group].mode == "prove" \
+                else max(default_depth(params), group_depth(params, group))
         if progress is not None:
-            progress(group, GROUPS[group].mode, depth)
-        verdicts += run_group(Path(core), params, group, out, depth, timeout)
+            progress(group, GROUPS[group].mode, chosen)
+        verdicts += run_group(Path(core), params, group, out, chosen, timeout)
     return verdicts
