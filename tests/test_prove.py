@@ -42,18 +42,19 @@ def test_unbounded_proofs_per_transform(transform, aggregation, tmp_path, capsys
 
 
 def test_bounded_groups_on_census(tmp_path, capsys):
-    """The bounded properties on one core with the L/R check on, within a short time limit
-    (each is then bounded to the depth it reached; the unbounded group is above)."""
+    """The bounded properties on one core with the L/R check on, to a depth short enough
+    for a loaded machine (the unbounded group is above; deeper runs are measured in
+    docs/verification.md)."""
     argv = ["prove", "--transform", "census", "--block", "3", "--disparities", "2",
             "--rounds", "2", "--aggregation", "1", "--width", "3", "--height", "2",
-            "--depth", "30", "--timeout", "6", "--checks", "free", "framed", "misframed",
+            "--depth", "16", "--timeout", "120", "--checks", "free", "framed", "misframed",
             "--out", str(tmp_path)]
     assert main(argv) == 0
     out = capsys.readouterr().out
     bounded = [p for p in PROPERTIES if p.group != "induction"]
     for prop in bounded:
         line = next(line for line in out.splitlines() if line.startswith(prop.name + " "))
-        assert "proven" in line or "bounded to depth" in line, line
+        assert "bounded to depth 16" in line, line
     for group in ("free", "framed", "misframed"):
         assert (tmp_path / f"{group}.sby").exists()
     verdicts = (tmp_path / "verdict.tsv").read_text().splitlines()
