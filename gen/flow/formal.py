@@ -156,7 +156,7 @@ def _sby_text(core, params, group, mode, depth, timeout):
     quiet = quiet_clocks(params, group)
     options = "mode prove" if mode == "prove" else f"mode bmc\ndepth {depth}"
     if timeout is not None:
-        options += f"\ntimeout {int(timeout)}"
+        options += f"\ntimeout {max(1, round(timeout))}"
     engine = "abc pdr" if mode == "prove" else "abc bmc3"
     # The counters must hold a run of `depth` clocks and the quiet window.
     width = max(8, (max(depth, quiet) + 1).bit_length() + 1)
