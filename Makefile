@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 DATASET ?= ../shared/datasets/middlebury2003/teddy
 JOBS ?= 2
 
-.PHONY: all demo test bench board icarus clean
+.PHONY: all demo test bench board soak icarus clean
 
 all: test
 
@@ -41,3 +41,11 @@ board: $(STAMP)
 
 clean:
 	rm -rf build .pytest_cache
+
+# Random configurations for a long budget (tests/test_random_configs.py): SOAK_EXAMPLES in
+# Amaranth's simulator, SOAK_VERILATOR_EXAMPLES under Verilator, new draws each run.
+SOAK_EXAMPLES ?= 200
+SOAK_VERILATOR_EXAMPLES ?= 10
+soak: $(STAMP) icarus
+	SOAK_EXAMPLES=$(SOAK_EXAMPLES) SOAK_VERILATOR_EXAMPLES=$(SOAK_VERILATOR_EXAMPLES) \
+	  $(PY) -m pytest -n 0 -q -s tests/test_random_configs.py -k "random_configurations"

@@ -58,6 +58,8 @@ def _argv(command, tmp_path):
         "cosim": ([command, "--simulator", "amaranth", "--synthetic", *small, "--crop", "16x4"],
                   [("--out", None)]),
         "report": ([command, *small, "--width", "16", "--height", "4"], [("--json", ".json")]),
+        "prove": ([command, "--block", "3", "--disparities", "2", "--rounds", "1"],
+                  [("--out", None)]),
         "explore": ([command, "--synthetic", "--transform", "census", *small[:2],
                      "--disparities", "8", "--width", "32", "--height", "8", "--device",
                      "ecp5-25k"], [("--out", None)]),

@@ -29,6 +29,7 @@ COMMANDS = {
     "verilog": "generate the Verilog of a stereo core",
     "ip": "package a core for FuseSoC, IP-XACT and Platform Designer",
     "cosim": "co-simulate the generated core on one frame, bit for bit",
+    "prove": "prove the core's AXI4-Stream properties (SymbiYosys)",
     "report": "FPGA resources and clock of a core (Yosys, nextpnr)",
     "explore": "quality x logic x memory x clock of a grid for one device (Dask)",
     "board": "a bitstream that shows the disparity map on a board's HDMI port",

@@ -13,7 +13,7 @@ __all__ = ["run_tool"]
 _WATCH_SECONDS = 5.0
 
 
-def run_tool(command, cwd, deadline, log_name, watch=None, name=None):
+def run_tool(command, cwd, deadline, log_name, watch=None, name=None, env=None):
     """Run one tool; returns None or a one-line failure description.
 
     The tool runs in a process group of its own so that a timeout kills what it started
@@ -22,11 +22,11 @@ def run_tool(command, cwd, deadline, log_name, watch=None, name=None):
     ``time.monotonic()`` value or None; past it the failure is ``timeout``. ``watch``, if
     given, is called every few seconds while the tool runs; a string it returns stops the
     tool and is returned as the failure. ``name`` is the tool in a failure (default: the
-    executable's name).
+    executable's name). ``env``: the tool's environment (default: this process's).
     """
     with open(Path(cwd) / log_name, "wb") as log:
         process = subprocess.Popen(command, cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
-                                   start_new_session=True)
+                                   start_new_session=True, env=env)
         try:
             while True:
                 remaining = None if deadline is None else deadline - time.monotonic()
