@@ -14,7 +14,9 @@ callers import each fact from the module that defines it.
 """
 
 from ..params import ParameterError
-__all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "check_buildable"]
+from .plan_timing import sgm_timing
+
+__all__ = ["MAX_WIDTH", "MAX_BLOCK", "MAX_DISPARITIES", "sgm_min_width", "check_buildable"]
 
 
 #: Widest frame the hardware is generated for. 8192 covers 8K video (7680); the line
@@ -32,6 +34,15 @@ MAX_BLOCK = 31
 
 #: Largest disparity range: 256 is the most an 8-bit disparity word holds.
 MAX_DISPARITIES = 256
+
+
+def sgm_min_width(params):
+    """Narrowest frame the SGM stage is built for: a position's path costs and minima go
+    back to memory ``timing.minima`` clocks after its slot (the minima last), and position
+    x - 1 of the next row reads them (W - 1) R clocks after it, so (W - 1) R must reach
+    that (census 5x5, D = 8, R = 1: W >= 15; it only binds for small D at R = 1 or 2,
+    whose frames are wider than D anyway)."""
+    return 1 + -(-sgm_timing(params).minima // params.rounds)
 
 
 def check_buildable(params):
@@ -54,3 +65,8 @@ def check_buildable(params):
     if params.disparities > MAX_DISPARITIES:
         raise ParameterError(f"disparities must be <= {MAX_DISPARITIES} for the hardware, "
                              f"not {params.disparities}")
+    if params.is_sgm and params.width < sgm_min_width(params):
+        raise ParameterError(f"image width must be >= {sgm_min_width(params)} for semi-global "
+                             f"aggregation at D = {params.disparities}, R = {params.rounds} "
+                             f"(the rows above are written back too late for a narrower "
+                             f"frame), not {params.width}")

@@ -303,11 +303,35 @@ def test_broken_missing_pair_cost_is_caught(monkeypatch):
 def test_any_rounds_dividing_d_are_built(disparities, rounds):
     """No rounds restriction: the timing's margins hold for every R that divides D <= 256
     (plan_timing asserts them), and the plan accepts it."""
-    params = sgm_params("census", 5, disparities, rounds, width=disparities + 4, height=4)
+    params = sgm_params("census", 5, disparities, rounds, width=disparities + 12, height=4)
     plan.check_buildable(params)
     timing = plan_timing.sgm_timing(params)
     assert timing.left_stages == (1 if rounds < 3 else 2 if rounds == 3 else 3)
     assert timing.left_history == (1 if (disparities, rounds) == (256, 1) else 2)
+
+
+def test_narrow_sgm_frames_are_refused():
+    """(W - 1) R clocks must cover the write-back of a position's minima (census 5x5,
+    D = 8, R = 1: 14 clocks, W >= 15): a narrower frame read the rows above before they
+    were written (found by tests/test_random_configs.py at 9 x 5)."""
+    params = sgm_params("census", 5, 8, 1, width=15, height=4)
+    assert plan.sgm_min_width(params) == 15
+    plan.check_buildable(params)
+    with pytest.raises(ParameterError) as refused:
+        plan.check_buildable(params.replace(width=14))
+    assert str(refused.value) == (
+        "image width must be >= 15 for semi-global aggregation at D = 8, R = 1 (the rows "
+        "above are written back too late for a narrower frame), not 14")
+
+
+@pytest.mark.parametrize("width, seed", [(12, 0), (14, 3)])
+def test_too_narrow_sgm_frame_differs(monkeypatch, width, seed):
+    """The broken variant of the limit: built anyway, a frame narrower than
+    ``sgm_min_width`` differs from the golden model (at W = 14, one clock short, only
+    where a position's minimum is needed)."""
+    params = sgm_params("rank", 5, 8, 1, 3, 20, 0, width=width, height=5)
+    with pytest.raises(AssertionError, match="sums differ"):
+        check_stage(params, monkeypatch, seed=seed)
 
 
 def test_rounds_not_dividing_d_are_refused():

@@ -25,7 +25,7 @@ from npstereo.gen.cli import cmd_cosim
 from npstereo.gen.cli.arguments import params_from_args
 from npstereo.gen.cli.main import build_parser
 from npstereo.hdl import trees
-from npstereo.hdl.plan import check_buildable
+from npstereo.hdl.plan import check_buildable, sgm_min_width
 from npstereo.params import (LINE_BUFFERS, LUT_INPUTS, P2_ADAPT_OFF, SGM, SGM_MAX_ADAPT,
                              TRANSFORMS, ParameterError, StereoParams, max_path_penalty)
 from npstereo.sim.cosim import run_frame
@@ -74,12 +74,14 @@ def cosim_argv(draw, simulator="amaranth"):
     argv += ["--line-buffer", draw(st.sampled_from(LINE_BUFFERS)),
              "--lut-inputs", str(draw(st.sampled_from(LUT_INPUTS)))]
     try:
-        first_valid = params_from_args(_parse(["cosim", "--simulator", simulator,
-                                               "--synthetic", "--out", "x", *argv])
-                                       ).first_valid_column
+        params = params_from_args(_parse(["cosim", "--simulator", simulator, "--synthetic",
+                                          "--out", "x", *argv]))
     except ParameterError:
         reject()
-    width = draw(st.integers(first_valid + 1, first_valid + MAX_EXTRA_WIDTH))
+    narrowest = params.first_valid_column + 1
+    if params.is_sgm:
+        narrowest = max(narrowest, sgm_min_width(params.with_size(narrowest, 1)))
+    width = draw(st.integers(narrowest, narrowest + MAX_EXTRA_WIDTH - 1))
     height = draw(st.integers(1, MAX_HEIGHT))
     seed = draw(st.integers(0, 2 ** 16))
     return ["cosim", "--simulator", simulator, "--synthetic", "--seed", str(seed),
