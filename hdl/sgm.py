@@ -88,16 +88,10 @@ def _smaller(lower, upper):
 
 
 def _minimum3(centre, lower, upper):
-    """Which of (centre, lower, upper) is the smallest, as the selects (lower wins, upper
-    wins): the three comparisons side by side, instead of two one behind the other."""
+    """min(centre, lower, upper): the three comparisons side by side, then two
+    multiplexers, instead of two comparisons one behind the other."""
     lower_wins = (lower < centre) & ~(upper < lower)
     upper_wins = (upper < centre) & (upper < lower)
-    return lower_wins, upper_wins
-
-
-def _chosen3(selects, centre, lower, upper):
-    """The value :func:`_minimum3`'s ``selects`` choose."""
-    lower_wins, upper_wins = selects
     return Mux(lower_wins, lower, Mux(upper_wins, upper, centre))
 
 
@@ -245,9 +239,9 @@ class SemiGlobalAggregation(wiring.Component):
         addresses at 2 + j, the words out of the block RAMs' output registers at 4 + j,
         the top-left word held from the previous position beside them at 5 + j; the first
         lane of round j + 1 arrives a clock later, so the candidates L + P1 are formed at
-        7 + j, their comparisons at 8 + j, their minimum at 9 + j, its comparison with
-        m + P2 and difference to m at 10 + j, and L = C + the normalised step at 11 + j,
-        which is written back to the position's own column and goes into the minima.
+        7 + j, their minimum at 8 + j, its comparison with m + P2 and difference to m at
+        9 + j, and L = C + the normalised step at 10 + j, which is written back to the
+        position's own column and goes into the minima.
         """
         p, t, slots = self.params, self.timing, self._slots
         units, rounds, width = p.per_round, p.rounds, p.width
@@ -270,7 +264,7 @@ class SemiGlobalAggregation(wiring.Component):
         # The address at 2, the read at 3, the RAM's output register at 4, then the levels
         # of the bank's choice: the word at 4 + t.rows - SGM_ROW_CLOCKS.
         word_at = 4 + t.rows - SGM_ROW_CLOCKS
-        normalise = word_at + 5     # newest word, + P1, comparisons, minimum of three
+        normalise = word_at + 4     # newest word, + P1, minimum of three
         assert t.rows == normalise + 2, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
         banks = cost_banks(p)
         # L back into the rows' memories at the position's own column, at t.rows.
@@ -311,16 +305,8 @@ class SemiGlobalAggregation(wiring.Component):
             after = register(m, Mux(slots.round(word_at + 2) == rounds - 1, ones,
                                      word[0] + p1), plus_bits, f"{name}_p_after")
             neighbours = [before, *plus, after]
-            # The comparisons registered with their candidates, then the choice (both in
-            # one clock were census 7x7 SGM's critical path at R = 10, 8.53 ns).
-            best = []
-            for i, v in enumerate(values):
-                trio = [v, neighbours[i], neighbours[i + 2]]
-                selects = register(m, Cat(*_minimum3(*trio)), 2, f"{name}_wins{i}")
-                trio = [register(m, c, len(c), f"{name}_trio{i}_{k}") for k, c in
-                        enumerate(trio)]
-                best.append(register(m, _chosen3(selects, *trio)[:bits], bits,
-                                     f"{name}_best{i}"))
+            best = [register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
+                              f"{name}_best{i}") for i, v in enumerate(values)]
             minimum, bound = minima[path]
             # The comparison with m + P2 and the difference to m side by side, then the
             # choice and + C (the three in one clock were 6 LUT levels, census 7x7).
