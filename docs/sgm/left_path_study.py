@@ -162,8 +162,18 @@ def report(rows):
     return "\n".join(lines)
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def config_label(config):
+    """A configuration of :data:`CONFIGS` as the tables name it."""
+    return f"{config[0]} {config[1]}x{config[1]}, P1 = {config[2]}, P2 = {config[3]}, " \
+           f"t = {config[4]}"
+
+
+def study_main(argv, description, measure, report):
+    """The command line of a study: ``--report`` prints ``report(rows)`` of ``--out``;
+    otherwise ``measure(dataset, config)`` yields the rows of each configuration of
+    :data:`CONFIGS`, written to ``--out`` after every configuration (an interrupted run
+    keeps what it measured)."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--dataset", type=Path)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--report", action="store_true",
@@ -176,21 +186,28 @@ def main(argv=None):
         parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
     rows = []
     for config in CONFIGS:
-        label = f"{config[0]} {config[1]}x{config[1]}, P1 = {config[2]}, P2 = {config[3]}, " \
-                f"t = {config[4]}"
-        for scene, left, right, truth, disparities in conditions(args.dataset):
-            for variant in VARIANTS:
-                correct, spread = score(left, right, truth, disparities, config, variant)
-                rows.append(dict(config=label, scene=scene, variant=variant[0],
-                                 correct=correct, spread=spread))
-                print(f"{label} | {scene:26s} | {variant[0]:18s} {correct:6.2f} "
-                      f"spread {spread}", flush=True)
-        # Written after every configuration: an interrupted run keeps what it measured.
+        rows += measure(args.dataset, config)
         tmp = args.out.with_suffix(".tmp")
         tmp.write_text(json.dumps({"rows": rows}, indent=0) + "\n")
         tmp.replace(args.out)
     print(report(rows))
     return 0
+
+
+def measure(dataset, config):
+    """The rows of every scene and variant for one configuration."""
+    label = config_label(config)
+    for scene, left, right, truth, disparities in conditions(dataset):
+        for variant in VARIANTS:
+            correct, spread = score(left, right, truth, disparities, config, variant)
+            print(f"{label} | {scene:26s} | {variant[0]:18s} {correct:6.2f} "
+                  f"spread {spread}", flush=True)
+            yield dict(config=label, scene=scene, variant=variant[0], correct=correct,
+                       spread=spread)
+
+
+def main(argv=None):
+    return study_main(argv, __doc__.splitlines()[0], measure, report)
 
 
 if __name__ == "__main__":

@@ -15,8 +15,6 @@ synthetic scenes (seeds 0-2) at noise 0, 2e-4 and 2e-3, for the two configuratio
 docs/sgm/left_path_study.py.
 """
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -27,7 +25,8 @@ from npstereo.golden.quality import evaluate
 from npstereo.params import SGM_ROW_PATHS, StereoParams
 
 sys.path.insert(0, str(Path(__file__).parent))
-from left_path_study import CONFIGS, conditions  # noqa: E402  (the same scenes and configs)
+from left_path_study import (CONFIGS, conditions, config_label,  # noqa: E402
+                             study_main)
 
 #: Columns back in the row above of each shallow path measured.
 SHALLOW = (2, 3, 4)
@@ -97,33 +96,19 @@ def report(rows):
     return "\n".join(lines)
 
 
+def measure(dataset, config):
+    """The rows of every scene and variant for one configuration."""
+    label = config_label(config)
+    for scene, left, right, truth, disparities in conditions(dataset):
+        for variant, summed in variants(left, right, config, disparities):
+            disparity = sgm.disparity_from_summed(summed, 3).disparity
+            correct = round(evaluate(disparity, truth, disparities).correct, 3)
+            print(f"{label} | {scene:26s} | {variant:28s} {correct:6.2f}", flush=True)
+            yield dict(config=label, scene=scene, variant=variant, correct=correct)
+
+
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--dataset", type=Path)
-    parser.add_argument("--out", type=Path, required=True)
-    parser.add_argument("--report", action="store_true",
-                        help="print the table of an existing --out instead of measuring")
-    args = parser.parse_args(argv)
-    if args.report:
-        print(report(json.loads(args.out.read_text())["rows"]))
-        return 0
-    if args.dataset is None:
-        parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
-    rows = []
-    for config in CONFIGS:
-        label = f"{config[0]} {config[1]}x{config[1]}, P1 = {config[2]}, P2 = {config[3]}, " \
-                f"t = {config[4]}"
-        for scene, left, right, truth, disparities in conditions(args.dataset):
-            for variant, summed in variants(left, right, config, disparities):
-                disparity = sgm.disparity_from_summed(summed, 3).disparity
-                correct = round(evaluate(disparity, truth, disparities).correct, 3)
-                rows.append(dict(config=label, scene=scene, variant=variant, correct=correct))
-                print(f"{label} | {scene:26s} | {variant:28s} {correct:6.2f}", flush=True)
-    tmp = args.out.with_suffix(".tmp")
-    tmp.write_text(json.dumps({"rows": rows}, indent=0) + "\n")
-    tmp.replace(args.out)
-    print(report(rows))
-    return 0
+    return study_main(argv, __doc__.splitlines()[0], measure, report)
 
 
 if __name__ == "__main__":
