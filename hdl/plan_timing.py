@@ -258,12 +258,11 @@ def sgm_timing(params, every=DEFAULT_EVERY):
                    for k, at in enumerate(picks[:-1], 1))
     history = 2 if margins(picks_with(2)) else 1
     picks = picks_with(history)
+    # C(x - k, b(x)) in its file before position x sums them at loop - 2.
+    assert margins(picks), picks
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
-    for k, at in enumerate(picks[:-1], 1):
-        # C(x - k, b(x)) in its file before position x sums them at loop - 2.
-        assert at + rounds + 2 <= k * rounds + loop - 2, (k, at)
     # Lu(x - J, b) in its file before position x reads it at loop - 1.
     assert lu + rounds + 1 <= steps * rounds + loop - 1
     left = lu + tree + 2
