@@ -65,6 +65,26 @@ def register(m, value, shape, name, enable=None):
     return reg
 
 
+def replica(m, value, name, shape=None, enable=None, reset_less=False):
+    """``value`` a clock later (or while ``enable``) in a register that synthesis keeps as
+    a copy of its own.
+
+    A value that reaches hundreds of flip-flops or lanes is one long net; copies each
+    driving a few loads are short. Identical registers would be merged back into one by
+    synthesis (with the same enable they are identical), so the copy is marked ``keep``:
+    the project's Yosys flow keeps the flip-flop behind a kept wire
+    (:func:`npstereo.gen.flow.yosys.synthesis_script`), and other tools read the attribute
+    on the register."""
+    reg = Signal(value.shape() if shape is None else shape, name=name, attrs={"keep": 1},
+                 reset_less=reset_less)
+    if enable is None:
+        m.d.sync += reg.eq(value)
+    else:
+        with m.If(enable):
+            m.d.sync += reg.eq(value)
+    return reg
+
+
 def taps(m, value, depth, name):
     """``value`` and free-running copies of it 1 .. ``depth`` clocks late (taps[k])."""
     copies = [value]

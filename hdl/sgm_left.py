@@ -41,7 +41,7 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import Store, bits_for, register, taps
+from .common import Store, bits_for, register, replica, taps
 from .plan_timing import sgm_left_read_registered
 from .trees import build_tree, register_plan
 
@@ -138,7 +138,7 @@ _LANES_PER_COPY = 8
 def _copies(m, value, shape, lanes, name, enable=None):
     """``value`` registered once per group of :data:`_LANES_PER_COPY` lanes: the list of
     each lane's copy."""
-    groups = [register(m, value, shape, f"{name}_copy{k}", enable)
+    groups = [replica(m, value, f"{name}_copy{k}", shape, enable, reset_less=True)
               for k in range(-(-lanes // _LANES_PER_COPY))]
     return [groups[i // _LANES_PER_COPY] for i in range(lanes)]
 

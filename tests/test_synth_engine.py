@@ -321,3 +321,48 @@ def test_tool_versions_name_the_native_engine():
     versions = tool_versions()
     assert versions["pyosys"] == tools.engine_version("native") != "missing"
     assert versions["flow"] == tools.FLOW_VERSION
+
+
+def _replicas_design(count):
+    """A valid bit, ``count`` replicas of it, each the enable of an 8-bit register."""
+    from amaranth.back import verilog
+    from amaranth.hdl import Module, Signal
+    from amaranth.lib import wiring
+    from amaranth.lib.wiring import In, Out
+
+    from npstereo.hdl.common import replica
+
+    class Top(wiring.Component):
+        valid: In(1)
+        data: In(8)
+        out: Out(8 * count)
+
+        def elaborate(self, platform):
+            m = Module()
+            late = Signal()
+            m.d.sync += late.eq(self.valid)
+            for k in range(count):
+                enable = replica(m, late, f"enable{k}")
+                word = Signal(8, name=f"word{k}")
+                with m.If(enable):
+                    m.d.sync += word.eq(self.data + k)
+                m.d.comb += self.out[8 * k:8 * (k + 1)].eq(word)
+            return m
+    return verilog.convert(Top(), name="top")
+
+
+@pytest.mark.parametrize("target", ["cyclonev", "ecp5"])
+def test_replicas_stay_copies(tmp_path, target, monkeypatch):
+    """hdl.common.replica's registers survive synthesis as copies (1 + 3 + 3 x 8 flip-flops);
+    without the flow's ``setattr`` of ``keep`` Yosys merges them into one."""
+    design = _replicas_design(3)
+    result = synthesise(design, target, "top", keep=tmp_path / "kept")
+    assert result["status"] == "ok", result
+    assert result["registers"] == 1 + 3 + 3 * 8
+    from npstereo.gen.flow import synthesise as flow
+    original = flow.synthesis_script
+    monkeypatch.setattr(flow, "synthesis_script", lambda *a: "\n".join(
+        line for line in original(*a).splitlines() if not line.startswith("setattr")) + "\n")
+    merged = synthesise(design, target, "top", keep=tmp_path / "merged")
+    assert merged["status"] == "ok", merged
+    assert merged["registers"] <= 1 + 1 + 3 * 8     # the copies are one register (or none)

@@ -73,7 +73,12 @@ def synthesis_script(target, top):
         # zeros are dropped rather than have its small stores turned into flip-flops.
         lines.append("delete t:$meminit_v2")
     lines += [
-        f"{flow} -run :{mapping}",
+        f"{flow} -run :coarse",
+        # Registers behind a kept wire are replicas (hdl/common.py ``replica``): kept, or
+        # opt_merge would make them one register again. After proc, before any opt.
+        "proc",
+        "setattr -set keep 1 w:* a:keep %i %ci1 t:$dff t:$adff %u %i",
+        f"{flow} -run coarse:{mapping}",
         select_memories.format(name="memories.json"),
         f"{flow} -run {mapping}:{ffram}",
         select_memories.format(name="ffram.json"),
