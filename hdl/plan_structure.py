@@ -17,7 +17,8 @@ __all__ = ["output_width", "transform_plan", "census_registers_compared",
            "STORE_SLICE_BITS", "store_slices", "cost_rows", "transformed_rows", "window_rows",
            "window_first_row", "window_pixels", "masks_after_compare", "vertical_bits",
            "vertical_plan", "horizontal_plan", "row_sum_plan", "BANK_CHOICE", "COST_BANK",
-           "cost_banks", "bank_choice_levels"]
+           "cost_banks", "choice_levels", "bank_choice_levels", "ROW_BANK", "ROW_BANK_DEEPEST",
+           "row_banks"]
 
 
 def output_width(params):
@@ -236,11 +237,40 @@ def cost_banks(params):
     return [COST_BANK] * full + ([rest] if rest else [])
 
 
-def bank_choice_levels(params):
-    """Registered levels of the choice of a unit's cost line buffer bank: level l chooses
-    by digit l of the bank's index in base :data:`BANK_CHOICE` (one level for up to
-    ``BANK_CHOICE`` banks, or a single bank)."""
-    levels, banks = 1, len(cost_banks(params))
+def choice_levels(banks):
+    """Registered levels of the choice among ``banks`` banks: level l chooses by digit l of
+    the bank's index in base :data:`BANK_CHOICE` (one level for up to ``BANK_CHOICE`` banks,
+    or a single bank)."""
+    levels = 1
     while banks > BANK_CHOICE:
         levels, banks = levels + 1, -(-banks // BANK_CHOICE)
     return levels
+
+
+def bank_choice_levels(params):
+    """Registered levels of the choice of a unit's cost line buffer bank."""
+    return choice_levels(len(cost_banks(params)))
+
+
+#: Shallowest and deepest bank of SGM's path rows: a DP16KD holds 512 x 36, 1K x 18, 2K x 9,
+#: 4K x 4, 8K x 2 or 16K x 1 bits, so a bank twice as deep takes its word in half as many
+#: bits per block RAM.
+ROW_BANK, ROW_BANK_DEEPEST = 512, 16384
+
+
+def row_banks(params):
+    """Depths of the banks of SGM's path rows (W*R words, ``per_round`` lanes per word):
+    the shallowest power-of-two depth from :data:`ROW_BANK` that needs at most
+    :data:`BANK_CHOICE` banks (one level of choice), up to :data:`ROW_BANK_DEEPEST`.
+
+    The rows' words are wide (top and top-left: 2 D/R path costs), so every bank is a row
+    of block RAMs and every level of the choice a multiplexer as wide as the word: census
+    5x5 SGM at 1280 x 720, D = 64, R = 4 in ten 512-word banks (three levels) did not route
+    on the ECP5-85k (congestion at the block RAMs with a fifth of the LUTs in use); in
+    three banks of 2K x 9 it takes about as many DP16KD."""
+    words = params.width * params.rounds
+    depth = ROW_BANK
+    while -(-words // depth) > BANK_CHOICE and depth < ROW_BANK_DEEPEST:
+        depth *= 2
+    full, rest = divmod(words, depth)
+    return [depth] * full + ([rest] if rest else [])

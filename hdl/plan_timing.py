@@ -11,8 +11,8 @@ elaborated hardware.
 from dataclasses import dataclass
 
 from ..params import SGM_PATH_COUNT, SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .plan_structure import (bank_choice_levels, cost_banks, cost_plan, cost_rows,
-                             horizontal_plan, masks_after_compare, row_sum_plan,
+from .plan_structure import (bank_choice_levels, choice_levels, cost_plan, cost_rows,
+                             horizontal_plan, masks_after_compare, row_banks, row_sum_plan,
                              transform_plan, vertical_plan)
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
@@ -156,18 +156,19 @@ SGM_GUIDE_CLOCKS = 2
 #: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the
 #: row address, its block RAM read address, the read, the RAM's output register, the
 #: top-left store's read register, the newest word's register (the next round's first
-#: value arrives), L + P1, the minimum of the three candidates, the normalisation's
-#: comparison and difference, + C; with the rows in one bank (:func:`sgm_row_clocks`).
-SGM_ROW_CLOCKS = 10
+#: value arrives), L + P1, the comparisons of the three candidates, their minimum, the
+#: normalisation's comparison and difference, its choice, + C; with the rows in one bank
+#: (:func:`sgm_row_clocks`).
+SGM_ROW_CLOCKS = 12
 
 
 def sgm_row_clocks(params):
     """Clocks to L of the paths from the row above: :data:`SGM_ROW_CLOCKS`, and with the
-    path rows in several banks (W R words, cut as a cost line buffer,
-    :func:`~.plan_structure.cost_banks`) a clock more per level of the bank's choice
+    path rows in several banks (W R words, :func:`~.plan_structure.row_banks`) a clock more
+    per level of the bank's choice
     (:func:`~.banks.banked_memory`)."""
-    several = len(cost_banks(params)) > 1
-    return SGM_ROW_CLOCKS + (bank_choice_levels(params) if several else 0)
+    banks = len(row_banks(params))
+    return SGM_ROW_CLOCKS + (choice_levels(banks) if banks > 1 else 0)
 
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to

@@ -43,7 +43,7 @@ from amaranth.lib.wiring import In, Out
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .banks import banked_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, tag_layout, taps
-from .plan_structure import cost_banks
+from .plan_structure import row_banks
 from .plan_timing import SGM_ROW_CLOCKS, sgm_timing
 from .sgm_left import left_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
@@ -88,10 +88,16 @@ def _smaller(lower, upper):
 
 
 def _minimum3(centre, lower, upper):
-    """min(centre, lower, upper): the three comparisons side by side, then two
-    multiplexers, instead of two comparisons one behind the other."""
+    """Which of (centre, lower, upper) is the smallest, as the selects (lower wins, upper
+    wins): the three comparisons side by side, instead of two one behind the other."""
     lower_wins = (lower < centre) & ~(upper < lower)
     upper_wins = (upper < centre) & (upper < lower)
+    return lower_wins, upper_wins
+
+
+def _chosen3(selects, centre, lower, upper):
+    """The value :func:`_minimum3`'s ``selects`` choose."""
+    lower_wins, upper_wins = selects
     return Mux(lower_wins, lower, Mux(upper_wins, upper, centre))
 
 
@@ -239,9 +245,10 @@ class SemiGlobalAggregation(wiring.Component):
         addresses at 2 + j, the words out of the block RAMs' output registers at 4 + j,
         the top-left word held from the previous position beside them at 5 + j; the first
         lane of round j + 1 arrives a clock later, so the candidates L + P1 are formed at
-        7 + j, their minimum at 8 + j, its comparison with m + P2 and difference to m at
-        9 + j, and L = C + the normalised step at 10 + j, which is written back to the
-        position's own column and goes into the minima.
+        7 + j, their comparisons at 8 + j, their minimum at 9 + j, its comparison with
+        m + P2 and difference to m at 10 + j, the normalised step at 11 + j, and L = C + the
+        step at 12 + j,
+        which is written back to the position's own column and goes into the minima.
         """
         p, t, slots = self.params, self.timing, self._slots
         units, rounds, width = p.per_round, p.rounds, p.width
@@ -264,9 +271,9 @@ class SemiGlobalAggregation(wiring.Component):
         # The address at 2, the read at 3, the RAM's output register at 4, then the levels
         # of the bank's choice: the word at 4 + t.rows - SGM_ROW_CLOCKS.
         word_at = 4 + t.rows - SGM_ROW_CLOCKS
-        normalise = word_at + 4     # newest word, + P1, minimum of three
-        assert t.rows == normalise + 2, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
-        banks = cost_banks(p)
+        normalise = word_at + 5     # newest word, + P1, comparisons, minimum of three
+        assert t.rows == normalise + 3, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
+        banks = row_banks(p)
         # L back into the rows' memories at the position's own column, at t.rows.
         write_address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
         m.d.sync += write_address.eq(self._aligned(own, 1, t.rows - 1, "sgm_rows_base")
@@ -305,8 +312,16 @@ class SemiGlobalAggregation(wiring.Component):
             after = register(m, Mux(slots.round(word_at + 2) == rounds - 1, ones,
                                      word[0] + p1), plus_bits, f"{name}_p_after")
             neighbours = [before, *plus, after]
-            best = [register(m, _minimum3(v, neighbours[i], neighbours[i + 2])[:bits], bits,
-                              f"{name}_best{i}") for i, v in enumerate(values)]
+            # The comparisons registered with their candidates, then the choice (both in
+            # one clock were census 7x7 SGM's critical path at R = 10, 8.53 ns).
+            best = []
+            for i, v in enumerate(values):
+                trio = [v, neighbours[i], neighbours[i + 2]]
+                selects = register(m, Cat(*_minimum3(*trio)), 2, f"{name}_wins{i}")
+                trio = [register(m, c, len(c), f"{name}_trio{i}_{k}") for k, c in
+                        enumerate(trio)]
+                best.append(register(m, _chosen3(selects, *trio)[:bits], bits,
+                                     f"{name}_best{i}"))
             minimum, bound = minima[path]
             # The comparison with m + P2 and the difference to m side by side, then the
             # choice and + C (the three in one clock were 6 LUT levels, census 7x7).
@@ -316,8 +331,12 @@ class SemiGlobalAggregation(wiring.Component):
                                 f"{name}_over{i}") for i, b in enumerate(best)]
             p2_now = self._aligned(p2[path], t.guide, normalise + 1, f"{name}_p2")
             fresh_now = self._aligned(fresh[path], t.guide, normalise + 1, f"{name}_fresh")
-            step = [_normalised(le, over, p2_now, fresh_now)
-                    for le, over in zip(below, above_m)]
+            # The choice registered, + C a clock later: both in one clock, behind P2's
+            # register for every lane, were census 7x7 SGM's critical path at R = 10
+            # (10.6 ns) once the comparisons above were registered.
+            step = [register(m, _normalised(le, over, p2_now, fresh_now), bits_for(p.p2),
+                             f"{name}_step{i}")
+                    for i, (le, over) in enumerate(zip(below, above_m))]
             results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 

@@ -209,7 +209,7 @@ def test_broken_round_edge_is_caught(monkeypatch):
     """The neighbour d + 1 left out of the minimum (it crosses into the next round for the
     last lane)."""
     monkeypatch.setattr(hdl_sgm, "_minimum3",
-                        lambda centre, lower, upper: hdl_sgm.Mux(lower < centre, lower, centre))
+                        lambda centre, lower, upper: (lower < centre, hdl_sgm.Const(0)))
     assert_stage_caught(monkeypatch)
 
 
@@ -228,19 +228,22 @@ def test_broken_row_normalisation_is_caught(monkeypatch):
     assert_stage_caught(monkeypatch)
 
 
-@pytest.mark.parametrize("bank, levels", [(32, 1), (8, 2)])
-def test_path_rows_in_banks_match_golden(monkeypatch, bank, levels):
-    """Path rows of W R = 80 words in banks of 32 or 8 (3 or 10 banks): the bank chosen in
-    one or two registered levels, L a clock later per level."""
-    monkeypatch.setattr(plan_structure, "COST_BANK", bank)
-    assert plan_structure.bank_choice_levels(BROKEN) == levels
+@pytest.mark.parametrize("shallowest, deepest, banks, levels", [(8, 1 << 14, 3, 1),
+                                                                  (8, 8, 10, 2)])
+def test_path_rows_in_banks_match_golden(monkeypatch, shallowest, deepest, banks, levels):
+    """Path rows of W R = 80 words: from banks of 8 words deepened to 32 (3 banks, one level
+    of choice), or kept at 8 (10 banks, two registered levels), L a clock later per level."""
+    monkeypatch.setattr(plan_structure, "ROW_BANK", shallowest)
+    monkeypatch.setattr(plan_structure, "ROW_BANK_DEEPEST", deepest)
+    assert len(plan_structure.row_banks(BROKEN)) == banks
+    assert plan_structure.choice_levels(banks) == levels
     assert plan_timing.sgm_row_clocks(BROKEN) == plan_timing.SGM_ROW_CLOCKS + levels
-    check_stage(BROKEN, monkeypatch, seed=bank)
+    check_stage(BROKEN, monkeypatch, seed=banks)
 
 
 def test_broken_path_rows_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words from the bank of the next address."""
-    monkeypatch.setattr(plan_structure, "COST_BANK", 32)
+    monkeypatch.setattr(plan_structure, "ROW_BANK", 32)
     choose_bank_early(monkeypatch, "_bank", clocks=1)
     assert_stage_caught(monkeypatch)
 
@@ -312,22 +315,22 @@ def test_any_rounds_dividing_d_are_built(disparities, rounds):
 
 def test_narrow_sgm_frames_are_refused():
     """(W - 1) R clocks must cover the write-back of a position's minima (census 5x5,
-    D = 8, R = 1: 14 clocks, W >= 15): a narrower frame read the rows above before they
+    D = 8, R = 1: 16 clocks, W >= 17): a narrower frame read the rows above before they
     were written (found by tests/test_random_configs.py at 9 x 5)."""
-    params = sgm_params("census", 5, 8, 1, width=15, height=4)
-    assert plan.sgm_min_width(params) == 15
+    params = sgm_params("census", 5, 8, 1, width=17, height=4)
+    assert plan.sgm_min_width(params) == 17
     plan.check_buildable(params)
     with pytest.raises(ParameterError) as refused:
-        plan.check_buildable(params.replace(width=14))
+        plan.check_buildable(params.replace(width=16))
     assert str(refused.value) == (
-        "image width must be >= 15 for semi-global aggregation at D = 8, R = 1 (the rows "
-        "above are written back too late for a narrower frame), not 14")
+        "image width must be >= 17 for semi-global aggregation at D = 8, R = 1 (the rows "
+        "above are written back too late for a narrower frame), not 16")
 
 
-@pytest.mark.parametrize("width, seed", [(12, 0), (14, 3)])
+@pytest.mark.parametrize("width, seed", [(12, 0), (16, 11)])
 def test_too_narrow_sgm_frame_differs(monkeypatch, width, seed):
     """The broken variant of the limit: built anyway, a frame narrower than
-    ``sgm_min_width`` differs from the golden model (at W = 14, one clock short, only
+    ``sgm_min_width`` differs from the golden model (at W = 16, one clock short, only
     where a position's minimum is needed)."""
     params = sgm_params("rank", 5, 8, 1, 3, 20, 0, width=width, height=5)
     with pytest.raises(AssertionError, match="sums differ"):
