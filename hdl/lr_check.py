@@ -20,14 +20,17 @@ output (the credit for the output queue, see :mod:`.core`), and, if its left pix
 the frame, one output word.
 """
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Shape, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, Store, better, bits_for, pipe, round_base, \
+from .common import SlotClock, Store, better, bits_for, pipe, replica, round_base, \
     tag_layout
 from .plan_timing import LR_STAGE_A, lr_stage_b, lr_timing
+
+#: Units served by one copy of the candidates' column and frame flag.
+LR_UNITS_PER_COPY = 8
 
 __all__ = ["LRCheck"]
 
@@ -146,10 +149,16 @@ class LRCheck(wiring.Component):
         # in the row (x - j*D/R >= i) and the position lies in the frame; each unit's flag
         # is a register of its own (a comparison in stage B would lengthen its path).
         tag = slots.delay(self.tag, 0, 1, "lr_tag")
-        x_minus_base = Signal(range(-p.disparities, p.width), name="lr_x_minus_base")
-        in_frame = Signal(name="lr_in_frame")
-        m.d.sync += [x_minus_base.eq(tag.x - round_base(m, slots, 1, units)),
-                     in_frame.eq(tag.valid & self._in_frame(tag))]
+        # One copy of x - j*D/R and of the frame flag per LR_UNITS_PER_COPY units (replicas):
+        # one register for all 64 units' comparisons was census 5x5's critical path at
+        # 1280 x 720, D = 64, R = 1 (6.2 ns of routing to the farthest unit, ECP5).
+        difference = tag.x - round_base(m, slots, 1, units)
+        framed = tag.valid & self._in_frame(tag)
+        copies = range(-(-units // LR_UNITS_PER_COPY))
+        x_minus_base = [replica(m, difference, f"lr_x_minus_base{k}",
+                                Shape.cast(range(-p.disparities, p.width)),
+                                reset_less=True) for k in copies]
+        in_frame = [replica(m, framed, f"lr_in_frame{k}") for k in copies]
         stage_a, stage_b = LR_STAGE_A, lr_stage_b(p)
         # With R >= 3 the word read in stage A is registered before it is compared (a LUT
         # RAM read and a carry chain in one clock were 7.3 ns, census 7x7 on ECP5): the
@@ -167,7 +176,8 @@ class LRCheck(wiring.Component):
         updated_words = []
         for i, store in enumerate(stores):
             ok = Signal(name=f"candidate_ok{i}")
-            m.d.sync += ok.eq(in_frame & (x_minus_base >= i))
+            k = i // LR_UNITS_PER_COPY
+            m.d.sync += ok.eq(in_frame[k] & (x_minus_base[k] >= i))
             ok = pipe(m, ok, stage_b - 3, f"candidate_ok{i}", reset=True)
             early_cost = pipe(m, self.sums[i], stage_b - 1, f"candidate_cost{i}")
             cost = pipe(m, early_cost, 1, f"candidate_cost{i}_b")
