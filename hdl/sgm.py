@@ -275,9 +275,13 @@ class SemiGlobalAggregation(wiring.Component):
         assert t.rows == normalise + 3, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
         banks = row_banks(p)
         # L back into the rows' memories at the position's own column, at t.rows.
+        # A counter of its own, loaded with the base in round 0: the base + the shared round
+        # counter was census 7x7 SGM's critical path at R = 10 (that counter's 7.7 ns of
+        # routing into the adder).
         write_address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
-        m.d.sync += write_address.eq(self._aligned(own, 1, t.rows - 1, "sgm_rows_base")
-                                     + slots.round(t.rows - 1))
+        m.d.sync += write_address.eq(Mux(
+            slots.first(t.rows - 1),
+            self._aligned(own, 1, t.rows - 1, "sgm_rows_base"), write_address + 1))
         written = {"top": Signal(2 * word_bits, name="sgm_rows_top_written"),
                    "top_right": Signal(word_bits, name="sgm_rows_top_right_written")}
         words = []
