@@ -173,9 +173,11 @@ def sgm_row_clocks(params):
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
 #: its loop (hdl/sgm_left.py): b(x) of the history or of G(0) registered (<= 1 clock after),
-#: C(p, b) picked (two clocks), its file written, the sum of P2 and the picked costs, then
-#: ref + P2 (the clock before the loop).
-SGM_LEFT_LEAD = 5
+#: C(p, b) picked (two clocks), its file written, the picked costs read, their sum with P2,
+#: then ref + P2 (the clock before the loop).
+SGM_LEFT_LEAD = 6
+
+
 
 
 def sgm_left_stages(rounds):
@@ -217,6 +219,7 @@ class SgmTiming:
     left_early: int     #: m(0) and argmin C(0, .) complete (from the costs)
     left_hand: int      #: m(0) stored for the row's first J positions
     left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
+    left_sum_clocks: int  #: clocks from reading the picked costs C(x - k, b(x)) to their sum
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
@@ -248,19 +251,21 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # long as the first level of its multiplexer needs it: C(p, .) is delayed to it, and
     # for k = J it is registered just before Lu(p, .).
     # The history's multiplexer takes two clocks (read a clock before b is registered, from
-    # the column two clocks before) where the margins below allow it: everywhere but at
-    # R = 1 with T = 8 (D > 128), where it takes one.
+    # the column two clocks before), and the picked costs are read from their files a clock
+    # before they are summed, where the margins below allow it: everywhere but at R = 1
+    # with T = 8 (D > 128), where each takes one clock.
     def picks_with(history):
         return tuple(max(tree + 1, history, argmin + history - (age - k) * rounds)
                      for k in range(1, steps)) + (lu - 1,)
 
-    def margins(picks):
-        return all(at + rounds + 2 <= k * rounds + loop - 2
+    def margins(picks, sum_clocks):
+        return all(at + rounds + 2 <= k * rounds + loop - 1 - sum_clocks
                    for k, at in enumerate(picks[:-1], 1))
-    history = 2 if margins(picks_with(2)) else 1
+    history, sum_clocks = next((h, s) for h in (2, 1) for s in (2, 1)
+                               if margins(picks_with(h), s))
     picks = picks_with(history)
-    # C(x - k, b(x)) in its file before position x sums them at loop - 2.
-    assert margins(picks), picks
+    # C(x - k, b(x)) in its file before position x reads it at loop - 1 - sum_clocks.
+    assert margins(picks, sum_clocks), picks
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
@@ -270,7 +275,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     rows = sgm_row_clocks(params)
     summed = max(left, rows) + sum(register_plan(SGM_PATH_COUNT, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, history,
-                     picks, left, rows, rows + tree + rounds, summed)
+                     sum_clocks, picks, left, rows, rows + tree + rounds, summed)
 
 
 # Evaluation, L/R check, the whole core ----------------------------------------------------

@@ -275,24 +275,29 @@ def left_path(owner, m, fresh, p2):
 
 
 def _reference(owner, m, column, m0, p2, chosen, sums):
-    """ref(x) + P2(x) in the clock ``loop`` - 1: P2 and the C(x - k, b(x)) that exist
-    (x - k >= 1) added a clock before, then Lu(x - J, b(x)), or m(0) for x <= J."""
+    """ref(x) + P2(x) in the clock ``loop`` - 1: the C(x - k, b(x)) that exist (x - k >= 1)
+    read from their files ``timing.left_sum_clocks`` before, registered where that is two,
+    and added to P2, then Lu(x - J, b(x)), or m(0) for x <= J."""
     t, steps = owner.timing, SGM_TRACK_STEPS
     bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
-    at = t.loop - 2
+    at = t.loop - 1 - t.left_sum_clocks
     # Which entries exist and where they are, from the column a clock ahead (a slot-aligned
     # value holds for the slot's R clocks, so the registers hold this position's): the
     # subtractions and comparisons in front of the files' multiplexers and the additions
-    # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5).
+    # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers
+    # and the additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz).
     x = column(at - 1)
     terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
                  Array(entries)[register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
              for k, entries in enumerate(sums, 1)]
-    terms.append(owner._aligned(p2, t.guide, at, "sgm_left_p2"))
+    if t.left_sum_clocks == 2:
+        terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
+                 for k, term in enumerate(terms, 1)]
+    terms.append(owner._aligned(p2, t.guide, t.loop - 2, "sgm_left_p2"))
     while len(terms) > 1:   # a tree of additions, not a chain
         terms = [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
     total = register(m, terms[0][:bits], bits, "sgm_left_csum")
-    x = column(at)
+    x = column(t.loop - 2)
     near = register(m, x <= steps, 1, "sgm_left_near")
     start = Mux(near, m0, Array(chosen)[register(m, x[:index], index, "sgm_left_chosen_at")])
     return (start + total)[:bits]

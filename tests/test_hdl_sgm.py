@@ -311,6 +311,7 @@ def test_any_rounds_dividing_d_are_built(disparities, rounds):
     timing = plan_timing.sgm_timing(params)
     assert timing.left_stages == (1 if rounds < 3 else 2 if rounds == 3 else 3)
     assert timing.left_history == (1 if (disparities, rounds) == (256, 1) else 2)
+    assert timing.left_sum_clocks == (1 if (disparities, rounds) == (256, 1) else 2)
 
 
 def test_narrow_sgm_frames_are_refused():
