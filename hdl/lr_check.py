@@ -25,8 +25,8 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, Store, better, bits_for, pipe, replica, round_base, \
-    tag_layout
+from .common import SlotClock, Store, better, bits_for, pipe, register, replica, \
+    round_base, tag_layout
 from .plan_timing import LR_STAGE_A, lr_stage_b, lr_timing
 
 #: Units served by one copy of the candidates' column and frame flag.
@@ -173,12 +173,20 @@ class LRCheck(wiring.Component):
         writing = slots.delay(tag.valid, 1, stage_b - 1, "lr_writing")
         last = slots.first(stage_b + rounds - 1) if rounds > 1 else Const(1)
         stores = [Store(m, f"right_winners{i}", entry, rounds) for i in range(units)]
-        updated_words = []
+        updated_words, framed_late = [], {}
         for i, store in enumerate(stores):
             ok = Signal(name=f"candidate_ok{i}")
             k = i // LR_UNITS_PER_COPY
-            m.d.sync += ok.eq(in_frame[k] & (x_minus_base[k] >= i))
-            ok = pipe(m, ok, stage_b - 3, f"candidate_ok{i}", reset=True)
+            if stage_b > 3:
+                # The comparison registered, then with the frame flag (both in one clock
+                # were census 7x7 SGM's deepest logic at R = 10: 5.3 LUT levels).
+                if k not in framed_late:
+                    framed_late[k] = pipe(m, in_frame[k], 1, f"lr_in_frame{k}_late", True)
+                m.d.sync += ok.eq(framed_late[k] &
+                                  register(m, x_minus_base[k] >= i, 1, f"candidate_ge{i}"))
+            else:
+                m.d.sync += ok.eq(in_frame[k] & (x_minus_base[k] >= i))
+            ok = pipe(m, ok, stage_b - 3 - (stage_b > 3), f"candidate_ok{i}", reset=True)
             early_cost = pipe(m, self.sums[i], stage_b - 1, f"candidate_cost{i}")
             cost = pipe(m, early_cost, 1, f"candidate_cost{i}_b")
             if rounds > 1:
