@@ -56,7 +56,11 @@ def tag_layout(params):
 def register(m, value, shape, name, enable=None):
     """``value`` in a register of ``shape`` without reset (a datapath register, see
     :func:`pipe`), loaded every clock or while ``enable`` is high."""
-    reg = Signal(shape, name=name, reset_less=True)
+    return _loaded(m, Signal(shape, name=name, reset_less=True), value, enable)
+
+
+def _loaded(m, reg, value, enable):
+    """``reg`` loaded with ``value`` every clock or while ``enable`` is high."""
     if enable is None:
         m.d.sync += reg.eq(value)
     else:
@@ -77,12 +81,7 @@ def replica(m, value, name, shape=None, enable=None, reset_less=False):
     on the register."""
     reg = Signal(value.shape() if shape is None else shape, name=name, attrs={"keep": 1},
                  reset_less=reset_less)
-    if enable is None:
-        m.d.sync += reg.eq(value)
-    else:
-        with m.If(enable):
-            m.d.sync += reg.eq(value)
-    return reg
+    return _loaded(m, reg, value, enable)
 
 
 def taps(m, value, depth, name):
