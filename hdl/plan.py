@@ -40,7 +40,7 @@ def sgm_min_width(params):
     """Narrowest frame the SGM stage is built for: a position's path costs and minima go
     back to memory ``timing.minima`` clocks after its slot (the minima last), and position
     x - 1 of the next row reads them (W - 1) R clocks after it, so (W - 1) R must reach
-    that (census 5x5, D = 8, R = 1: W >= 17; it only binds for small D at R = 1 or 2,
+    that (census 5x5, D = 8, R = 1: W >= 18; it only binds for small D at R = 1 or 2,
     whose frames are wider than D anyway)."""
     return 1 + -(-sgm_timing(params).minima // params.rounds)
 

@@ -154,12 +154,12 @@ SGM_GUIDE_CLOCKS = 2
 
 
 #: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the
-#: row address, its block RAM read address, the read, the RAM's output register, the
-#: top-left store's read register, the newest word's register (the next round's first
-#: value arrives), L + P1, the comparisons of the three candidates, their minimum, the
-#: normalisation's comparison and difference, its choice, + C; with the rows in one bank
-#: (:func:`sgm_row_clocks`).
-SGM_ROW_CLOCKS = 12
+#: column's flags, the row address, its block RAM read address, the read, the RAM's output
+#: register, the top-left store's read register, the newest word's register (the next
+#: round's first value arrives), L + P1, the comparisons of the three candidates, their
+#: minimum, the normalisation's comparison and difference, its choice, + C; with the rows
+#: in one bank (:func:`sgm_row_clocks`).
+SGM_ROW_CLOCKS = 13
 
 
 def sgm_row_clocks(params):

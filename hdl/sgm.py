@@ -241,14 +241,14 @@ class SemiGlobalAggregation(wiring.Component):
         """L of top-left, top and top-right per lane, at ``timing.rows``.
 
         Offsets after the input, for round j, with the rows in one bank (a clock later per
-        level of the bank's choice with several, ``plan_timing.sgm_row_clocks``): the word
-        addresses at 2 + j, the words out of the block RAMs' output registers at 4 + j,
-        the top-left word held from the previous position beside them at 5 + j; the first
-        lane of round j + 1 arrives a clock later, so the candidates L + P1 are formed at
-        7 + j, their comparisons at 8 + j, their minimum at 9 + j, its comparison with
-        m + P2 and difference to m at 10 + j, the normalised step at 11 + j, and L = C + the
-        step at 12 + j,
-        which is written back to the position's own column and goes into the minima.
+        level of the bank's choice with several, ``plan_timing.sgm_row_clocks``): the row
+        bases at 2, the word addresses at 3 + j, the words out of the block RAMs' output
+        registers at 5 + j, the top-left word held from the previous position beside them
+        at 6 + j; the first lane of round j + 1 arrives a clock later, so the candidates
+        L + P1 are formed at 8 + j, their comparisons at 9 + j, their minimum at 10 + j, its
+        comparison with m + P2 and difference to m at 11 + j, the normalised step at
+        12 + j, and L = C + the step at 13 + j, which is written back to the position's own
+        column and goes into the minima.
         """
         p, t, slots = self.params, self.timing, self._slots
         units, rounds, width = p.per_round, p.rounds, p.width
@@ -257,20 +257,23 @@ class SemiGlobalAggregation(wiring.Component):
         ones = (1 << plus_bits) - 1
         word_bits = units * bits
         x = self.tag.x
-        last_column = x == width - 1
 
-        # Row addresses (x * R and, for top-right, (x + 1) * R), slot-aligned at 1, without a
+        # Row addresses (x * R and, for top-right, (x + 1) * R), slot-aligned at 2, without a
         # multiplier: consecutive positions are raster-continuous (x + 1, or 0 at a line
-        # start), so the bases advance by R per position.
+        # start), so the bases advance by R per position. The column's flags are registered
+        # first: the input's column through its comparisons and the choice into the bases
+        # was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4 (10.9 ns).
         depth = width * rounds
+        first_column = register(m, x == 0, 1, "sgm_row_first_column")
+        last_column = register(m, x == width - 1, 1, "sgm_row_last_column")
         own = Signal(range(depth), name="sgm_row_base", reset_less=True)
         nxt = Signal(range(depth), name="sgm_row_base_next", reset_less=True)
-        with m.If(slots.first(0) & self.tag.valid):
-            m.d.sync += [own.eq(Mux(x == 0, 0, own + rounds)),
-                         nxt.eq(Mux(last_column, 0, Mux(x == 0, rounds, nxt + rounds)))]
-        # The address at 2, the read at 3, the RAM's output register at 4, then the levels
-        # of the bank's choice: the word at 4 + t.rows - SGM_ROW_CLOCKS.
-        word_at = 4 + t.rows - SGM_ROW_CLOCKS
+        with m.If(slots.first(1) & self._valid_at(1)):
+            m.d.sync += [own.eq(Mux(first_column, 0, own + rounds)),
+                         nxt.eq(Mux(last_column, 0, Mux(first_column, rounds, nxt + rounds)))]
+        # The address at 3, the read at 4, the RAM's output register at 5, then the levels
+        # of the bank's choice: the word at 5 + t.rows - SGM_ROW_CLOCKS.
+        word_at = 5 + t.rows - SGM_ROW_CLOCKS
         normalise = word_at + 5     # newest word, + P1, comparisons, minimum of three
         assert t.rows == normalise + 3, "plan_timing.SGM_ROW_CLOCKS counts the same steps"
         banks = row_banks(p)
@@ -281,12 +284,12 @@ class SemiGlobalAggregation(wiring.Component):
         write_address = Signal(range(depth), name="sgm_rows_write_address", reset_less=True)
         m.d.sync += write_address.eq(Mux(
             slots.first(t.rows - 1),
-            self._aligned(own, 1, t.rows - 1, "sgm_rows_base"), write_address + 1))
+            self._aligned(own, 2, t.rows - 1, "sgm_rows_base"), write_address + 1))
         written = {"top": Signal(2 * word_bits, name="sgm_rows_top_written"),
                    "top_right": Signal(word_bits, name="sgm_rows_top_right_written")}
         words = []
         for name, base in (("top", own), ("top_right", nxt)):
-            address = register(m, base + slots.round(1), range(depth), f"sgm_{name}_address")
+            address = register(m, base + slots.round(2), range(depth), f"sgm_{name}_address")
             words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
                                        banks, address, write_address, written[name],
                                        self._valid_at(t.rows)))

@@ -33,8 +33,8 @@ def test_unbounded_proofs_per_transform(transform, aggregation, tmp_path, capsys
     extra = ["--aggregation", aggregation, "--no-lr-check", "--checks", "induction",
              "--depth", "4"]
     if aggregation == "sgm":
-        # The narrowest SGM frame is 8 at D = 2, R = 2 (plan.sgm_min_width).
-        extra += ["--p1", "2", "--p2", "5", "--rounds", "2", "--width", "8"]
+        # The narrowest SGM frame is 9 at D = 2, R = 2 (plan.sgm_min_width).
+        extra += ["--p1", "2", "--p2", "5", "--rounds", "2", "--width", "9"]
     assert main(_argv(transform, tmp_path, *extra)) == 0
     out = capsys.readouterr().out
     assert re.search(r"^hold +proven \(unbounded, PDR\)", out, re.M), out
