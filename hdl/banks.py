@@ -47,19 +47,22 @@ def banked_memory(m, name, shape, banks, read_address, write_address, write_data
                   write_enable):
     """A memory of ``sum(banks)`` words (bank b holds the words from b * banks[0] on),
     read every clock at ``read_address`` and written at ``write_address`` when
-    ``write_enable``. Returns the word read, in a register: two clocks after the address
+    ``write_enable`` (or at ``write_address[b]`` into bank b: copies of the address, each
+    driving one bank's block RAMs). Returns the word read, in a register: two clocks after the address
     with one bank (the read, the block RAM's output register), and with several banks a
     clock more per level of the bank's choice (:func:`choose_bank`). No collision logic
     (``no_rw_check``): the callers never read a word in the clock it is written."""
     low = (banks[0] - 1).bit_length() if len(banks) > 1 else len(read_address)
+    if not isinstance(write_address, (list, tuple)):
+        write_address = [write_address] * len(banks)
     words = []
     for b, depth in enumerate(banks):
         memory = Memory(shape=shape, depth=depth, init=[], attrs={"no_rw_check": 1})
         m.submodules[f"{name}_{b}" if len(banks) > 1 else name] = memory
         read, write = memory.read_port(domain="sync"), memory.write_port()
         mine = write_enable if len(banks) == 1 else \
-            write_enable & (write_address[low:] == b)
-        m.d.comb += [read.addr.eq(read_address[:low]), write.addr.eq(write_address[:low]),
+            write_enable & (write_address[b][low:] == b)
+        m.d.comb += [read.addr.eq(read_address[:low]), write.addr.eq(write_address[b][:low]),
                      write.data.eq(write_data), write.en.eq(mine)]
         words.append(pipe(m, read.data, 1, f"{name}_{b}_out"))
     if len(banks) == 1:
