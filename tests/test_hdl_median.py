@@ -190,7 +190,7 @@ def core_params(**changes):
 @pytest.mark.parametrize("changes, image", [
     ({}, "independent"),
     (dict(rounds=2, aggregation=1, lr_threshold=None), "layers"),
-    (dict(block=5, rounds=4, lr_threshold=0), "layers"),
+    (dict(rounds=4, lr_threshold=0), "layers"),
     (dict(aggregation="sgm", rounds=1, block=5), "layers"),
     (dict(aggregation="sgm", rounds=2, p1=4, p2=20, lr_threshold=2), "independent"),
 ])
@@ -244,11 +244,36 @@ def test_broken_median_guard_is_caught(monkeypatch):
         test_core_with_median_ignores_stale_memories(monkeypatch)
 
 
-def test_latency_counts_the_median():
-    """The flush after the last frame (plan_timing.latency) and the output offset grow by
-    the median's W + 1 positions and its clocks."""
-    params = core_params()
-    plain = params.replace(median=False)
-    assert plan_timing.latency(params) == plan_timing.latency(plain) + params.width + 1
-    assert (plan_timing.core_timing(params).output
-            == plan_timing.core_timing(plain).output + hdl_median.MEDIAN_LATENCY)
+def test_latency_is_the_measured_flush_with_median():
+    """After a frame's last pixel its last word leaves ``plan_timing.latency`` positions
+    (W + 1 more than without the median) and the output offset later, as measured; the
+    formula without the median's W + 1 fails the same measurement."""
+    from test_hdl_plan import measured_flush, planned_flush
+    params = core_params(width=24, height=6)
+    flush, output = measured_flush(params)
+    assert flush == planned_flush(params, output)
+    assert output == plan_timing.core_timing(params.replace(median=False)).output \
+        + hdl_median.MEDIAN_LATENCY
+    plain = plan_timing.latency(params.replace(median=False))
+    assert plan_timing.latency(params) == plain + params.width + 1
+    assert flush != plain * params.rounds + output
+
+
+# The generated Verilog under cocotb (Icarus) ----------------------------------------------
+
+def test_icarus_stream_with_median():
+    """Frames back to back under idle cycles and backpressure, a reset, misframed lines and
+    an aborted frame (test_cocotb's full plan), the median on: every good frame bit-exact;
+    the same core with the upper median instead of the lower is reported mismatching."""
+    from npstereo.hdl.verilog import core_verilog
+    from npstereo.sim import cosim
+    from test_cocotb import FULL_PLAN, assert_bit_exact, config, frames
+
+    params = config("census", 3, 8, 1, 1).replace(median=True)
+    pairs = frames(params)
+    assert_bit_exact(cosim.run_stream("icarus", params, pairs, FULL_PLAN))
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(hdl_median, "_rank_choice", lambda n: (9 + 9 - n) // 2 if n > 1 else 8)
+        broken = core_verilog(params)
+    result = cosim.run_stream("icarus", params, pairs, FULL_PLAN[:1], core_text=broken)
+    assert result.frames and not result.ok

@@ -56,12 +56,16 @@ from bench_quality import LR_THRESHOLD, opencv_maps, opencv_matchers  # noqa: E4
 
 NOISE = (0.0, 2e-4, 2e-3)
 SEEDS = (0, 1, 2)
-#: Measurement groups, one JSON update each: the peers, then each matching cost.
-GROUPS = ("peers", "census", "ad", "grad", "ad3")
+#: Measurement groups, one JSON update each: the peers, each matching cost, and the census
+#: cost's grid widened (smaller P1, t = 3 and a constant P2) once the median had changed the
+#: best penalties.
+GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide")
 #: Penalty grids (P1, P2, t): the census one around the defaults, the others' P2 at most
 #: 127 - Cmax so that the path costs stay at 7 bits as the defaults' do.
 CENSUS_GRID = list(itertools.product((16, 24, 32), (48, 64, 79), (4, 5)))
 EXTRA_GRID = list(itertools.product((16, 24), (64, 72), (5,)))
+WIDE_GRID = list(itertools.product((8, 12), (48, 64, 79), (3, 4, 5, None))) + \
+    list(itertools.product((16, 24), (64, 79), (3, None)))
 UNIQUENESS = (0, 2, 3, 4)
 MEDIANS = ("none", "plain", "valid", "fill")
 BASE = dict(cost="census", p1=24, p2=79, adapt=5, paths=4, uniq=0, median="none")
@@ -184,13 +188,14 @@ def measure(dataset, group):
     if group == "peers":
         yield from measure_peers(dataset)
         return
-    grid = CENSUS_GRID if group == "census" else EXTRA_GRID
+    grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID}.get(group, EXTRA_GRID)
+    cost = group.split()[0]
     for scene, left, right, truth, disparities in conditions(dataset):
         params = StereoParams(transform="census", block=7, disparities=disparities)
         volume = sgm.cost_volume(left, right, params).astype(np.int64)
         max_cost = params.max_cost
-        if group != "census":
-            volume = volume + extra_term(group, left, right, disparities)
+        if cost != "census":
+            volume = volume + extra_term(cost, left, right, disparities)
             max_cost += 7
             # x - d < 0: no partner pixel, Cmax as golden/sgm.py's cost_volume has it.
             volume[:, np.arange(disparities)[None, :] > np.arange(left.shape[1])[:, None]] \
@@ -202,7 +207,7 @@ def measure(dataset, group):
             five = four + right_path(volume, p1, p2, left, adapt, max_cost)
             for paths, summed in ((4, four), (5, five)):
                 for row in score_summed(summed, truth, disparities):
-                    yield dict(scene=scene, cost=group, p1=p1, p2=p2, adapt=adapt,
+                    yield dict(scene=scene, cost=cost, p1=p1, p2=p2, adapt=adapt,
                                paths=paths, **row)
             print(f"{group:6s} {scene:26s} P1={p1} P2={p2} t={adapt}: 4 paths "
                   f"{_base(four, truth, disparities):6.2f}, 5 paths "
