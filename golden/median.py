@@ -13,12 +13,10 @@ as the smallest value) and over a median that leaves invalid pixels invalid.
 
 import numpy as np
 
+from ..params import MEDIAN_FILL
 from .lr_check import INVALID
 
-__all__ = ["MEDIAN_FILL", "median3"]
-
-#: Valid values in the window from which an invalid centre is filled (a majority of 9).
-MEDIAN_FILL = 5
+__all__ = ["median3"]
 
 
 def median3(disparity):

@@ -27,7 +27,7 @@ the invalid ones sort first.
 the comparators that reach the padding removed: 9 inputs, :data:`NETWORK`), a register
 after every layer; beside it the count of valid keys n chooses the ((n + 1) // 2)-th valid
 key, the sorted key at index (8 + 9 - n) // 2, and keeps it iff n >= 1 and the centre is
-valid or n >= 5 (:data:`~npstereo.golden.median.MEDIAN_FILL`).
+valid or n >= 5 (:data:`~npstereo.params.MEDIAN_FILL`).
 """
 
 import operator
@@ -38,7 +38,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..golden.median import MEDIAN_FILL
+from ..params import MEDIAN_FILL
 from .common import bits_for, pipe, tag_layout
 
 __all__ = ["sorting_network", "NETWORK", "network_layers", "MEDIAN_LATENCY", "Median3"]

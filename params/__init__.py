@@ -31,7 +31,7 @@ __all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
            "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
            "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
            "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
-           "sgm_summed_cost_bits"]
+           "sgm_summed_cost_bits", "MEDIAN_FILL"]
 
 #: What the hardware keeps of the rows above for the vertical aggregation: the matching
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
@@ -43,6 +43,10 @@ LINE_BUFFERS = ("auto", "costs", "transforms", "pixels")
 #: Gowin: the inverted differences go to adders) or 6 (Intel ALMs, AMD/Xilinx: three
 #: differences at a time go to 3:2 compressors whose LUTs also invert them).
 LUT_INPUTS = (4, 6)
+
+#: The 3x3 median (``StereoParams.median``) fills an invalid pixel from this many valid
+#: values of its window, a majority of the nine (docs/semantics.md, "3x3 median").
+MEDIAN_FILL = 5
 
 
 @dataclass(frozen=True)

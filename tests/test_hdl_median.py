@@ -150,6 +150,26 @@ def test_broken_stage_is_caught(monkeypatch, broken):
     assert mismatches(7, 5, 2, 1, 0.1, seed=35) > 0
 
 
+def reference_median(disparity):
+    """docs/semantics.md's "3x3 median" in plain Python loops."""
+    height, width = disparity.shape
+    out = np.full((height, width), -1, np.int16)
+    for y, x in itertools.product(range(height), range(width)):
+        values = sorted(int(disparity[y + j, x + i]) for j in (-1, 0, 1) for i in (-1, 0, 1)
+                        if 0 <= y + j < height and 0 <= x + i < width
+                        and disparity[y + j, x + i] >= 0)
+        if values and (disparity[y, x] >= 0 or len(values) >= 5):
+            out[y, x] = values[(len(values) + 1) // 2 - 1]
+    return out
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_golden_median_is_the_reference(seed):
+    rng = np.random.default_rng(seed)
+    disparity = random_map(rng, 9, 13, 0.1 + 0.2 * seed)
+    assert np.array_equal(median3(disparity), reference_median(disparity))
+
+
 def test_golden_median_rules():
     """golden/median.py on hand-made windows: the lower median of the valid values, an
     invalid centre filled from five valid values and not from four, the frame's outside
