@@ -33,7 +33,9 @@ left path, golden/sgm.py):
   IR(x - d)|, 31) >> 2, ``grad`` the same of the horizontal gradients I(x + 1) - I(x - 1)
   (borders replicated), ``ad3`` the 3x3 sum of min(AD, 31) over the window, at most 255,
   >> 5;
-- penalties P1, P2 and adaptive P2's t re-chosen on all six conditions.
+- ``blur``: census 7x7 on images through a 3x3 binomial prefilter (added after teddy with
+  noise 2e-3 showed the gap there); the guide of adaptive P2 is the filtered image too;
+- penalties P1, P2 and adaptive P2's t re-chosen on all seven conditions.
 """
 
 import itertools
@@ -58,14 +60,15 @@ from bench_quality import LR_THRESHOLD, opencv_maps, opencv_matchers  # noqa: E4
 
 NOISE = (0.0, 2e-4, 2e-3)
 SEEDS = (0, 1, 2)
-#: Measurement groups, one JSON update each: the peers, each matching cost, and the census
+#: Measurement groups, one JSON update each: the peers, each matching cost, the census
 #: cost's grid widened (smaller P1, t = 3 and a constant P2) once the median had changed the
-#: best penalties.
-GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide")
+#: best penalties, and census on prefiltered images (added after teddy with noise).
+GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide", "blur")
 #: Penalty grids (P1, P2, t): the census one around the defaults, the others' P2 at most
 #: 127 - Cmax so that the path costs stay at 7 bits as the defaults' do.
 CENSUS_GRID = list(itertools.product((16, 24, 32), (48, 64, 79), (4, 5)))
 EXTRA_GRID = list(itertools.product((16, 24), (64, 72), (5,)))
+BLUR_GRID = list(itertools.product((16, 24), (64, 79), (5,)))
 WIDE_GRID = list(itertools.product((8, 12), (48, 64, 79), (3, 4, 5, None))) + \
     list(itertools.product((16, 24), (64, 79), (3, None)))
 UNIQUENESS = (0, 2, 3, 4)
@@ -123,6 +126,17 @@ def extra_term(kind, left, right, disparities):
     return term
 
 
+def binomial(image):
+    """The 3x3 binomial filter ([1 2 1] x [1 2 1] / 16, rounded, borders replicated): a
+    prefilter of two line buffers and adders in hardware, shifts only."""
+    padded = np.pad(image.astype(np.int64), 1, mode="edge")
+    weights = (1, 2, 1)
+    height, width = image.shape
+    total = sum(weights[i] * weights[j] * padded[i:i + height, j:j + width]
+                for i in range(3) for j in range(3))
+    return ((total + 8) >> 4).astype(np.uint8)
+
+
 def right_path(volume, p1, p2, guide, adapt, max_cost):
     """L of the path from the right (exact SGM form): the top path of the volume with x
     reversed and transposed, so that the predecessor of (x, y) is (x + 1, y)."""
@@ -159,6 +173,16 @@ def median3(disparity, kind):
     return np.where(keep, lower, INVALID).astype(np.int16)
 
 
+def stored(row):
+    """Whether a row is kept in ``--out``: every variant at the defaults' penalties (those
+    of :data:`ALONE`), at the other penalties only those without uniqueness test with no or
+    the chosen (``fill``) median, which the tables of the best penalties compare."""
+    if "method" in row:
+        return True
+    base = (row["p1"], row["p2"], row["adapt"]) in ((24, 79, 5), (24, 72, 5))
+    return base or (row["uniq"] == 0 and row["median"] in ("none", "fill"))
+
+
 def score_summed(summed, truth, disparities):
     """Rows (paths set by the caller) of every uniqueness, check and median variant."""
     checked = sgm.disparity_from_summed(summed, LR_THRESHOLD)
@@ -192,13 +216,16 @@ def measure(dataset, group):
     if group == "peers":
         yield from measure_peers(dataset)
         return
-    grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID}.get(group, EXTRA_GRID)
+    grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID,
+            "blur": BLUR_GRID}.get(group, EXTRA_GRID)
     cost = group.split()[0]
     for scene, left, right, truth, disparities in conditions(dataset):
         params = StereoParams(transform="census", block=7, disparities=disparities)
+        if cost == "blur":
+            left, right = binomial(left), binomial(right)
         volume = sgm.cost_volume(left, right, params).astype(np.int64)
         max_cost = params.max_cost
-        if cost != "census":
+        if cost not in ("census", "blur"):
             volume = volume + extra_term(cost, left, right, disparities)
             max_cost += 7
             # x - d < 0: no partner pixel, Cmax as golden/sgm.py's cost_volume has it.
@@ -211,8 +238,10 @@ def measure(dataset, group):
             five = four + right_path(volume, p1, p2, left, adapt, max_cost)
             for paths, summed in ((4, four), (5, five)):
                 for row in score_summed(summed, truth, disparities):
-                    yield dict(scene=scene, cost=cost, p1=p1, p2=p2, adapt=adapt,
+                    row = dict(scene=scene, cost=cost, p1=p1, p2=p2, adapt=adapt,
                                paths=paths, **row)
+                    if stored(row):
+                        yield row
             print(f"{group:6s} {scene:26s} P1={p1} P2={p2} t={adapt}: 4 paths "
                   f"{_base(four, truth, disparities):6.2f}, 5 paths "
                   f"{_base(five, truth, disparities):6.2f} (L/R check)", flush=True)
@@ -239,6 +268,7 @@ def means(rows, **fixed):
 #: The rows of the first table: each option alone on the defaults, then combinations, as
 #: (cost, P1, P2, t, paths, uniq, median).
 ALONE = [("census", 24, 79, 5, 4, 0, "none"), ("census", 24, 79, 5, 5, 0, "none"),
+         ("blur", 24, 79, 5, 4, 0, "none"), ("blur", 24, 79, 5, 4, 0, "fill"),
          ("census", 24, 79, 5, 4, 0, "plain"), ("census", 24, 79, 5, 4, 0, "valid"),
          ("census", 24, 79, 5, 4, 0, "fill"), ("census", 24, 79, 5, 4, 2, "none"),
          ("census", 24, 79, 5, 4, 3, "none"), ("census", 24, 79, 5, 4, 4, "none"),
@@ -298,7 +328,8 @@ def report(rows):
                   "| cost, paths, median | best P1/P2/t | " + " | ".join(names)
                   + " | mean | mean vs HH | worst condition vs HH |",
                   "|---|---|" + "---:|" * (len(names) + 3)]
-        for cost, paths, median in itertools.product(("census", "ad", "grad", "ad3"), (4, 5),
+        for cost, paths, median in itertools.product(("census", "ad", "grad", "ad3", "blur"),
+                                                     (4, 5),
                                                      ("none", "fill")):
             candidates = [(np.mean(list(values.values())), key, values)
                           for (check, key), _ in table.items()
