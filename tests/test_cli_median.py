@@ -1,11 +1,14 @@
 """``--median`` on the command line: the map it gives, and what refuses it in one line."""
 
+import json
+
 import numpy as np
 import pytest
 
 from npstereo.gen.cli.main import main
 from npstereo.golden.median import median3
 from npstereo.golden.pipeline import disparity_map
+from npstereo.golden.quality import evaluate
 from npstereo.params import ParameterError, StereoParams
 
 D = 16
@@ -43,3 +46,17 @@ def test_prove_refuses_the_median(tmp_path, capsys):
 def test_median_must_be_a_bool():
     with pytest.raises(ParameterError, match="median must be True or False, not 'yes'"):
         StereoParams(median="yes")
+
+
+def test_eval_names_the_median(capsys, tmp_path, pair_files, small_pair):
+    _, _, scene = pair_files
+    result = tmp_path / "median.json"
+    assert main(["eval", "--dataset", str(scene), "--block", "5", "--aggregation", "sgm",
+                 "--median", "--disparities", str(D), "--json", str(result)]) == 0
+    assert "SGM P1=24 P2=79 t=5, 3x3 median" in capsys.readouterr().out
+    (row,) = json.loads(result.read_text())
+    assert row["median"] is True
+    params = StereoParams("census", 5, D, aggregation="sgm", median=True)
+    truth = (4 * small_pair.ground_truth).astype(np.uint8) / 4.0
+    expected = evaluate(disparity_map(*small_pair.gray(), params).disparity, truth, D)
+    assert row["correct"] == pytest.approx(expected.correct)
