@@ -168,6 +168,11 @@ def config_label(config):
            f"t = {config[4]}"
 
 
+def rows_json(rows):
+    """``{"rows": [...]}`` with one row per line (a study's rows are many and alike)."""
+    return "{\"rows\": [\n" + ",\n".join(json.dumps(row) for row in rows) + "\n]}\n"
+
+
 def study_main(argv, description, measure, report, configs=CONFIGS):
     """The command line of a study: ``--report`` prints ``report(rows)`` of ``--out``;
     otherwise ``measure(dataset, config)`` yields the rows of each configuration of
@@ -188,7 +193,7 @@ def study_main(argv, description, measure, report, configs=CONFIGS):
     for config in configs:
         rows += measure(args.dataset, config)
         tmp = args.out.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"rows": rows}, indent=0) + "\n")
+        tmp.write_text(rows_json(rows))
         tmp.replace(args.out)
     print(report(rows))
     return 0
