@@ -1,7 +1,8 @@
 """The whole golden pipeline: left-referenced disparity map, bit for bit as the hardware.
 
 Stages in hardware order: transformation, matching costs, aggregation, WTA per partition
-(calculation stage), WTA across partitions (evaluation stage), left/right consistency check.
+(calculation stage), WTA across partitions (evaluation stage), left/right consistency check,
+and the optional 3x3 median of the output (:mod:`.median`).
 The image is processed in bands of rows (each with the aggregation's halo) whose cost
 volume is bounded in size and computed a few rows at a time so that the working set stays
 in cache; bands run in parallel threads (numpy releases the GIL). docs/golden-model.md
@@ -20,6 +21,7 @@ import numpy as np
 from .aggregation import aggregate
 from .data import check_gray_pair
 from .lr_check import DisparityResult, invalidate_border, lr_check
+from .median import median3
 from .matching_cost import cost_dtype, matching_costs, pixel_sums
 from ..params import ParameterError
 from . import sgm
@@ -122,8 +124,9 @@ def disparity_map(left, right, params, threads=None):
             f"{params.width}x{params.height}")
     params = params.with_size(width, height)
     if params.is_sgm:
-        return sgm.disparity_map(left, right, params, params.p1, params.p2,
-                                 adapt=params.p2_adapt or None, threads=threads)
+        return _filtered(sgm.disparity_map(left, right, params, params.p1, params.p2,
+                                           adapt=params.p2_adapt or None, threads=threads),
+                         params)
     workers = threads or os.cpu_count() or 1
     with ThreadPoolExecutor(max_workers=workers) as pool:
         left_t, right_t = pool.map(lambda image: transform(image, params), (left, right))
@@ -142,4 +145,13 @@ def disparity_map(left, right, params, threads=None):
 
     checked = raw_left if params.lr_threshold is None else lr_check(
         raw_left, raw_right, params.lr_threshold)
-    return DisparityResult(invalidate_border(checked, params), raw_left, raw_right)
+    return _filtered(DisparityResult(invalidate_border(checked, params), raw_left, raw_right),
+                     params)
+
+
+def _filtered(result, params):
+    """``result`` with the 3x3 median of its checked map when ``params.median`` (the raw
+    maps unchanged: they are what the check compared)."""
+    if not params.median:
+        return result
+    return DisparityResult(median3(result.disparity), result.left, result.right)

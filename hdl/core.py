@@ -1,7 +1,8 @@
 """The whole core: pixel pairs in, disparities out, as ``amaranth.lib.stream`` streams.
 
 Chains :class:`~.input_stage.InputStage`, :class:`~.calculation_stage.CalculationStage`,
-:class:`~.evaluation_stage.EvaluationStage` and :class:`~.lr_check.LRCheck` (the order of
+:class:`~.evaluation_stage.EvaluationStage`, :class:`~.lr_check.LRCheck` and, with
+``params.median``, :class:`~.median.Median3` (the order of
 :func:`npstereo.golden.pipeline.disparity_map`).
 
 **A pipeline that never stalls.** Time is cut into slots of R clocks; in the last clock of a
@@ -28,6 +29,8 @@ The payloads are :mod:`.stream`'s formats; :mod:`.verilog` wraps the core in the
 top level ``npstereo_core`` with AXI4-Stream port names.
 """
 
+from dataclasses import dataclass
+
 from amaranth.hdl import Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
@@ -38,6 +41,7 @@ from .common import SlotClock, pipe
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
+from .median import Median3
 from .plan import check_buildable
 from .plan_structure import masks_after_compare
 from .plan_timing import core_timing, latency
@@ -97,6 +101,8 @@ class NpStereoCore(wiring.Component):
         self.calculation_at, self.sums_at = timing.calculation, timing.sums
         self.evaluation_at = timing.evaluation
         self.lr_check = LRCheck(params, timing.left - timing.sums, timing.sums)
+        self.median = Median3(params, len(self.lr_check.disparity_out)) if params.median \
+            else None
         self.clock_latency = timing.output
         #: Output queue depth: every position in flight must find room for its word.
         self.queue_depth = timing.queue_depth
@@ -115,6 +121,7 @@ class NpStereoCore(wiring.Component):
         m.submodules.calculation_stage = calc = self.calculation_stage
         m.submodules.evaluation_stage = ev = self.evaluation_stage
         m.submodules.lr_check = lr = self.lr_check
+        words = self._output_words(m, lr)
 
         # The slot clock: round 0 .. R-1, free-running.
         round_ = Const(0)
@@ -163,10 +170,10 @@ class NpStereoCore(wiring.Component):
         wiring.connect(m, queue.r_stream, out_port.sink)
         wiring.connect(m, out_port.source, wiring.flipped(self.source))
         m.d.comb += [
-            queue.w_en.eq(lr.produce), queue.w_data.eq(word),
-            word.data.disparity.eq(Mux(lr.valid, lr.disparity_out, 0)),
-            word.data.valid.eq(lr.valid),
-            word.first.eq(lr.frame_start), word.last.eq(lr.line_end),
+            queue.w_en.eq(words.produce), queue.w_data.eq(word),
+            word.data.disparity.eq(Mux(words.valid, words.disparity, 0)),
+            word.data.valid.eq(words.valid),
+            word.first.eq(words.frame_start), word.last.eq(words.line_end),
         ]
         admit = Signal()        # the decision of this clock: the next slot has a position
         credit_taken = Signal()  # the same, a clock late with R >= 2 (see below)
@@ -185,7 +192,7 @@ class NpStereoCore(wiring.Component):
         # levels, from the output port's level through the FIFO's read to the counter).
         back = Signal(2, name="credits_back")
         m.d.sync += back.eq((out_port.sink.valid & out_port.sink.ready)
-                            + (lr.retire & ~lr.produce))
+                            + (words.retire & ~words.produce))
         returned = credits + back
         kept = Signal(range(self.queue_depth + 3), name="credits_kept")
         taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
@@ -199,7 +206,7 @@ class NpStereoCore(wiring.Component):
         # The last word's pulse is registered where the L/R check makes it, a clock late
         # (a flush then ends a clock later): the counter sits between the admission and
         # the output, and its adder took the pulse's own logic across the core.
-        frame_done = pipe(m, lr.produce & lr.frame_end, 1, "frame_done", reset=True)
+        frame_done = pipe(m, words.produce & words.frame_end, 1, "frame_done", reset=True)
 
         # Framing and admission. An explicit state register and if/else chains rather
         # than m.FSM: Amaranth's FSM emits partial case statements that Verilator's lint
@@ -392,6 +399,33 @@ class NpStereoCore(wiring.Component):
         if masks_after_compare(p):
             m.d.comb += calc.keep.eq(inp.keep)
         return m
+
+
+    def _output_words(self, m, lr):
+        """The stage whose words go to the output queue: the L/R check's, or the 3x3
+        median of them (one tick out per tick in, so the credits balance either way)."""
+        if self.median is None:
+            return _Words(lr.retire, lr.produce, lr.valid, lr.disparity_out, lr.frame_start,
+                          lr.line_end, lr.frame_end)
+        m.submodules.median = median = self.median
+        m.d.comb += [median.retire.eq(lr.retire), median.produce.eq(lr.produce),
+                     median.valid.eq(lr.valid), median.disparity.eq(lr.disparity_out),
+                     median.x.eq(lr.x), median.y.eq(lr.y)]
+        return _Words(median.retire_out, median.produce_out, median.valid_out,
+                      median.disparity_out, median.frame_start, median.line_end,
+                      median.frame_end)
+
+
+@dataclass(frozen=True)
+class _Words:
+    """The signals of the last stage that the output queue and the credits take."""
+    retire: Signal
+    produce: Signal
+    valid: Signal
+    disparity: Signal
+    frame_start: Signal
+    line_end: Signal
+    frame_end: Signal
 
 
 def _has_room(credits):

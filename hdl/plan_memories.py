@@ -62,6 +62,12 @@ def memories(params, every=DEFAULT_EVERY):
                                     p.aggregated_cost_bits + d_bits + 1))
         result.append(MemoryUse("left winners", 1, history, tag_layout(p).size + d_bits))
         result.append(MemoryUse("dR history", 1, history, d_bits))
+    if p.median:
+        # Median3's line buffers: the entry (key of d_bits + 1, word flag, four edge
+        # flags) and the key of the row above.
+        d_bits = max(1, (p.disparities - 1).bit_length())
+        result += [MemoryUse("median row", 1, p.width, d_bits + 6),
+                   MemoryUse("median row above", 1, p.width, d_bits + 1)]
     depth = core_timing(p, every).queue_depth
     result.append(MemoryUse("output queue", 1, depth - 1, output_width(p) + 2))
     return result

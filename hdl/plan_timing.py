@@ -14,6 +14,7 @@ from ..params import SGM_PATH_COUNT, SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .plan_structure import (bank_choice_levels, choice_levels, cost_plan, cost_rows,
                              horizontal_plan, masks_after_compare, row_banks, row_sum_plan,
                              transform_plan, vertical_plan)
+from .median import MEDIAN_LATENCY
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
@@ -351,6 +352,8 @@ def core_timing(params, every=DEFAULT_EVERY):
     evaluation = calculation + timing.latency
     left = evaluation + evaluation_latency(params)
     output = sums + lr_timing(params, left - sums).latency
+    if params.median:
+        output += MEDIAN_LATENCY
     depth = 1 << (-(-output // params.rounds) + 4).bit_length()
     return CoreTiming(calculation, sums, evaluation, left, output, depth)
 
@@ -358,15 +361,16 @@ def core_timing(params, every=DEFAULT_EVERY):
 def latency(params):
     """Positions from a pixel's admission to the admission of the position that completes
     its output word: the window's centre trails the newest pixel by r rows and r columns,
-    the aggregation centre the window's by a rows and a columns, and the L/R check waits
-    D positions (positions are raster-continuous, so a row is W of them).
+    the aggregation centre the window's by a rows and a columns, the L/R check waits
+    D positions and the 3x3 median W + 1 (positions are raster-continuous, so a row is W
+    of them).
 
     After the last frame of a stream the core feeds this many dummy positions (the flush);
     a frame that follows at once needs none (its own pixels push the previous one out).
     """
     p = params
     lag = (p.radius + p.agg_radius) * (p.width + 1)
-    return lag + (p.disparities if p.lr_check else 0)
+    return lag + (p.disparities if p.lr_check else 0) + (p.width + 1 if p.median else 0)
 
 
 def cycles_per_frame(params):

@@ -31,7 +31,7 @@ __all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
            "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
            "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
            "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
-           "sgm_summed_cost_bits"]
+           "sgm_summed_cost_bits", "MEDIAN_FILL"]
 
 #: What the hardware keeps of the rows above for the vertical aggregation: the matching
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
@@ -43,6 +43,10 @@ LINE_BUFFERS = ("auto", "costs", "transforms", "pixels")
 #: Gowin: the inverted differences go to adders) or 6 (Intel ALMs, AMD/Xilinx: three
 #: differences at a time go to 3:2 compressors whose LUTs also invert them).
 LUT_INPUTS = (4, 6)
+
+#: The 3x3 median (``StereoParams.median``) fills an invalid pixel from this many valid
+#: values of its window, a majority of the nine (docs/semantics.md, "3x3 median").
+MEDIAN_FILL = 5
 
 
 @dataclass(frozen=True)
@@ -83,6 +87,9 @@ class StereoParams:
         :data:`P2_ADAPT_OFF` (0) for a constant P2. With ``aggregation="sgm"`` ``None``
         becomes :data:`SGM_DEFAULT_ADAPT` (adaptive P2 is on by default); with a box it
         must be ``None``.
+    median : bool
+        A 3x3 median of the output map after the L/R check (docs/semantics.md, "3x3
+        median"), for the box and SGM alike; off by default.
     """
 
     transform: str = "census"
@@ -98,6 +105,7 @@ class StereoParams:
     p1: int | None = None
     p2: int | None = None
     p2_adapt: int | None = None
+    median: bool = False
 
     def __post_init__(self):
         if self.transform not in TRANSFORMS:
@@ -144,6 +152,8 @@ class StereoParams:
         if not is_int(self.lut_inputs) or self.lut_inputs not in LUT_INPUTS:
             raise ParameterError(f"lut inputs must be one of "
                                  f"{', '.join(map(str, LUT_INPUTS))}, not {self.lut_inputs!r}")
+        if not isinstance(self.median, bool):
+            raise ParameterError(f"median must be True or False, not {self.median!r}")
 
     def _resolve_penalties(self):
         """Validate the SGM penalties and store the defaults in place of ``None``."""
@@ -289,8 +299,10 @@ class StereoParams:
         size = "" if self.width is None else f" {self.width}x{self.height}"
         buffer = "" if self.line_buffer == "auto" else f" LB={self.line_buffer}"
         lut = "" if self.lut_inputs == 4 else f" LUT{self.lut_inputs}"
+        median = " median" if self.median else ""
         return (f"{self.transform} {self.block}x{self.block} D={self.disparities} "
-                f"R={self.rounds} {self.describe_aggregation()} LR={lr}{size}{buffer}{lut}")
+                f"R={self.rounds} {self.describe_aggregation()} LR={lr}{median}{size}{buffer}"
+                f"{lut}")
 
     def describe_aggregation(self):
         """The aggregation alone: ``A=3``, or ``SGM P1=24 P2=79 t=5`` (``t=off``)."""

@@ -50,6 +50,7 @@ from npstereo.golden import sgm
 from npstereo.golden.data import StereoPair, load_middlebury, read_image
 from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.lr_check import INVALID, lr_check
+from npstereo.golden.median import median3
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
@@ -61,11 +62,15 @@ LR_THRESHOLD = 3
 #: npstereo box configurations: (transform, block, aggregation size).
 BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 
-#: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent). The
-#: recommended ones first: the default (docs/sgm.md, "Choosing the defaults") and the best
-#: census 5x5 on clean real scenes; then the best census 5x5 with a constant P2.
+#: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent, 3x3
+#: median). The recommended ones first: the default (docs/sgm.md, "Choosing the defaults")
+#: and the best census 5x5 on clean real scenes; then the best census 5x5 with a constant
+#: P2; then the defaults with the 3x3 median (issue 28, docs/sgm.md "Quality options"), and
+#: with the median at the penalties its study chose (P1 = 16, t = 4).
 SGM = [tuple(fields[name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
-       for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None)]
+       + (False,) for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None, False)] + [
+    tuple(SGM_RECOMMENDED[0][name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
+    + (True,), ("census", 7, 16, 79, 4, True)]
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).
@@ -205,16 +210,20 @@ def main(argv=None):
         unchecked[:, :params.first_valid_column] = INVALID
         add("npstereo box", f"npstereo {transform} {block}x{block}, {aggregation}x{aggregation}"
             f" box", (unchecked, result.disparity), time.perf_counter() - start)
-    for transform, block, p1, p2, adapt in SGM:
+    for transform, block, p1, p2, adapt, median in SGM:
         start = time.perf_counter()
         params = StereoParams(transform=transform, block=block, disparities=disparities,
                               lr_threshold=LR_THRESHOLD)
         result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
         unchecked = result.left.copy()
         unchecked[:, :disparities] = INVALID
+        maps = (unchecked, result.disparity)
+        if median:
+            maps = tuple(median3(disparity) for disparity in maps)
         p2_text = f"P2={p2}" + (f" adaptive t={adapt}" if adapt is not None else "")
         add("npstereo SGM", f"npstereo {transform} {block}x{block}, SGM 4 paths P1={p1} "
-            f"{p2_text}", (unchecked, result.disparity), time.perf_counter() - start)
+            f"{p2_text}" + (", 3x3 median" if median else ""), maps,
+            time.perf_counter() - start)
     for name, matcher in opencv_matchers(cv2, num_disparities):
         start = time.perf_counter()
         maps = opencv_maps(cv2, matcher, left, right, disparities, num_disparities)

@@ -119,7 +119,7 @@ def test_small_core_report_and_cache(tmp_path):
 #: (rows above as transforms): the rows above as costs (the cost lines, A - 1 = 4 rows at
 #: 11 bits), R = 1 (stores are registers, not memories), no aggregation and no L/R check,
 #: semi-global aggregation (its rows of path costs, minima and stores), the rows above as
-#: pixels (taller input lines, no transform lines).
+#: pixels (taller input lines, no transform lines), the 3x3 median (its line buffers).
 MEMORY_SHAPES = [
     StereoParams(transform="ext-rank", block=3, disparities=4, rounds=2, aggregation=5,
                  width=16, height=4, line_buffer="costs"),
@@ -131,6 +131,9 @@ MEMORY_SHAPES = [
                  p1=3, p2=20, width=8, height=4),
     StereoParams(transform="census", block=3, disparities=4, rounds=2, aggregation=3,
                  width=16, height=4, line_buffer="pixels"),
+    # The 3x3 median's two line buffers.
+    StereoParams(transform="census", block=3, disparities=4, rounds=1, aggregation=3,
+                 width=16, height=4, median=True),
 ]
 
 

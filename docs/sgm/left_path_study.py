@@ -168,10 +168,15 @@ def config_label(config):
            f"t = {config[4]}"
 
 
-def study_main(argv, description, measure, report):
+def rows_json(rows):
+    """``{"rows": [...]}`` with one row per line (a study's rows are many and alike)."""
+    return "{\"rows\": [\n" + ",\n".join(json.dumps(row) for row in rows) + "\n]}\n"
+
+
+def study_main(argv, description, measure, report, configs=CONFIGS):
     """The command line of a study: ``--report`` prints ``report(rows)`` of ``--out``;
     otherwise ``measure(dataset, config)`` yields the rows of each configuration of
-    :data:`CONFIGS`, written to ``--out`` after every configuration (an interrupted run
+    ``configs`` (default :data:`CONFIGS`), written to ``--out`` after every configuration (an interrupted run
     keeps what it measured)."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--dataset", type=Path)
@@ -185,10 +190,10 @@ def study_main(argv, description, measure, report):
     if args.dataset is None:
         parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
     rows = []
-    for config in CONFIGS:
+    for config in configs:
         rows += measure(args.dataset, config)
         tmp = args.out.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"rows": rows}, indent=0) + "\n")
+        tmp.write_text(rows_json(rows))
         tmp.replace(args.out)
     print(report(rows))
     return 0

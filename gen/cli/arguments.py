@@ -86,6 +86,10 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
                              "(semi-global, four paths)" + (" (one or more)" if many else "")
                              + f" (default {STEREO_DEFAULTS['aggregation']})")
     add_lr_arguments(parser)
+    parser.add_argument("--median", action="store_true",
+                        help="3x3 median of the output map after the L/R check (invalid "
+                             "pixels filled from five valid neighbours; docs/semantics.md) "
+                             "(default off)")
     census7 = StereoParams(transform="census", block=7)
     sgm = parser.add_argument_group("semi-global aggregation (only with --aggregation sgm)")
     sgm.add_argument("--p1", type=int, metavar="N",
@@ -214,7 +218,7 @@ def params_from_args(args, transform=None, block=None, aggregation=None):
         line_buffer=getattr(args, "line_buffer", STEREO_DEFAULTS["line_buffer"]),
         lut_inputs=getattr(args, "lut_inputs", STEREO_DEFAULTS["lut_inputs"]),
         p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
-        p2_adapt=adapt if sgm else None)
+        p2_adapt=adapt if sgm else None, median=getattr(args, "median", False))
 
 
 def check_output_folder(value, option="--out"):

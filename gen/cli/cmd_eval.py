@@ -63,7 +63,9 @@ def run(args):
         rows.append({"dataset": pair.name, "condition": condition.label,
                      "transform": p.transform, "block": p.block, "disparities": p.disparities,
                      "rounds": p.rounds, "aggregation": p.aggregation, "p1": p.p1, "p2": p.p2,
-                     "p2_adapt": p.p2_adapt, "aggregation_label": p.describe_aggregation(),
+                     "p2_adapt": p.p2_adapt, "median": p.median,
+                     "aggregation_label": p.describe_aggregation()
+                     + (", 3x3 median" if p.median else ""),
                      "lr_threshold": p.lr_threshold, **quality.as_dict(), "seconds": seconds})
     print(f"{pair.name} ({left.shape[1]}x{left.shape[0]}), D={args.disparities}, "
           f"{condition.label}")
