@@ -24,7 +24,7 @@ from .lr_check import DisparityResult, invalidate_border, lr_check
 from .median import median3
 from .matching_cost import cost_dtype, matching_costs, pixel_sums
 from ..params import ParameterError
-from . import sgm
+from . import sgm, subpixel
 from .transform import transform
 from .wta import RightWTA, evaluate_partitions, partition_disparities, wta_partition
 
@@ -94,7 +94,16 @@ def _match_band(left_t, right_t, params, band, rows):
                 yield summed
 
         partition_results.append(wta_partition(partition_costs(), disparities))
-    return evaluate_partitions(partition_results), right_wta.best_disparity
+    best = evaluate_partitions(partition_results)
+    if not params.subpixel_bits:
+        return best, right_wta.best_disparity, None
+    # The winners' neighbours: S once more, now that the winners are known.
+    neighbours = subpixel.NeighbourCosts(best)
+    for d in range(params.disparities):
+        neighbours.update(aggregate(volume[d], params.aggregation, rows, out=aggregated,
+                                    scratch=scratch), d)
+    return best, right_wta.best_disparity, neighbours.values(params.disparities,
+                                                             params.subpixel_bits)
 
 
 def disparity_map(left, right, params, threads=None):
@@ -145,8 +154,12 @@ def disparity_map(left, right, params, threads=None):
 
     checked = raw_left if params.lr_threshold is None else lr_check(
         raw_left, raw_right, params.lr_threshold)
-    return _filtered(DisparityResult(invalidate_border(checked, params), raw_left, raw_right),
-                     params)
+    result = DisparityResult(invalidate_border(checked, params), raw_left, raw_right)
+    if params.subpixel_bits:
+        # The fraction first: the median (as in hardware) takes the output values.
+        result = subpixel.with_fraction(result, np.concatenate([r[2] for r in results]),
+                                        params.subpixel_bits)
+    return _filtered(result, params)
 
 
 def _filtered(result, params):

@@ -29,6 +29,7 @@ from ..params import (SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS,
 from .data import check_gray_pair
 from .lr_check import INVALID, DisparityResult, lr_check
 from .matching_cost import cost_dtype, matching_costs, pixel_sums
+from .subpixel import fit_volume, with_fraction
 from .transform import transform
 
 __all__ = ["cost_volume", "path_p2", "path_costs", "aggregate", "winners",
@@ -391,7 +392,7 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
     # path and the winners work row by row anyway, so bands change no bit of the result.
     rows = max(1, _BAND_ELEMENTS // (width * params.disparities))
     previous = {path: None for path in paths if path in SGM_ROW_PATHS}
-    raw_left, raw_right = [], []
+    raw_left, raw_right, fitted = [], [], []
     workers = max(1, min(len(paths), threads or os.cpu_count() or 1))
     with ThreadPoolExecutor(max_workers=workers) as pool:
         for y0 in range(0, height, rows):
@@ -416,5 +417,10 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
             band_left, band_right = winners(summed)
             raw_left.append(band_left)
             raw_right.append(band_right)
-    return _checked(np.concatenate(raw_left), np.concatenate(raw_right), params.disparities,
-                    params.lr_threshold)
+            if params.subpixel_bits:
+                fitted.append(fit_volume(summed, band_left, params.subpixel_bits))
+    result = _checked(np.concatenate(raw_left), np.concatenate(raw_right), params.disparities,
+                      params.lr_threshold)
+    if not params.subpixel_bits:
+        return result
+    return with_fraction(result, np.concatenate(fitted), params.subpixel_bits)

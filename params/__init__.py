@@ -13,7 +13,7 @@ The transforms are described in :mod:`.transforms`, semi-global aggregation's pa
 penalties and defaults in :mod:`.sgm`; everything is importable from here.
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 from .errors import ParameterError, UserError, is_int, is_integral
 from .sgm import (P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2,
@@ -31,7 +31,7 @@ __all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
            "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
            "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
            "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
-           "sgm_summed_cost_bits", "MEDIAN_FILL"]
+           "sgm_summed_cost_bits", "MEDIAN_FILL", "MAX_SUBPIXEL_BITS"]
 
 #: What the hardware keeps of the rows above for the vertical aggregation: the matching
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
@@ -47,6 +47,10 @@ LUT_INPUTS = (4, 6)
 #: The 3x3 median (``StereoParams.median``) fills an invalid pixel from this many valid
 #: values of its window, a majority of the nine (docs/semantics.md, "3x3 median").
 MEDIAN_FILL = 5
+
+#: Most fractional bits of the sub-pixel disparity (users of stereo cameras ask for 3-5;
+#: OpenCV's StereoSGBM gives 4).
+MAX_SUBPIXEL_BITS = 5
 
 
 @dataclass(frozen=True)
@@ -90,6 +94,10 @@ class StereoParams:
     median : bool
         A 3x3 median of the output map after the L/R check (docs/semantics.md, "3x3
         median"), for the box and SGM alike; off by default.
+    subpixel_bits : int
+        F, 0 .. :data:`MAX_SUBPIXEL_BITS`: fractional bits of the output disparity (a
+        parabola through the winner's summed costs and its neighbours', docs/semantics.md
+        "Sub-pixel disparity"); 0 is the whole levels of the plain WTA.
     """
 
     transform: str = "census"
@@ -106,6 +114,14 @@ class StereoParams:
     p2: int | None = None
     p2_adapt: int | None = None
     median: bool = False
+    subpixel_bits: int = 0
+
+    def __repr__(self):
+        # The dataclass's form, without subpixel_bits while it is 0: repr() is the report
+        # cache's key, and every configuration without the fraction keeps its key.
+        shown = [f for f in fields(self) if f.name != "subpixel_bits" or self.subpixel_bits]
+        return (f"{type(self).__qualname__}("
+                + ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown) + ")")
 
     def __post_init__(self):
         if self.transform not in TRANSFORMS:
@@ -154,6 +170,10 @@ class StereoParams:
                                  f"{', '.join(map(str, LUT_INPUTS))}, not {self.lut_inputs!r}")
         if not isinstance(self.median, bool):
             raise ParameterError(f"median must be True or False, not {self.median!r}")
+        if (not is_int(self.subpixel_bits)
+                or not 0 <= self.subpixel_bits <= MAX_SUBPIXEL_BITS):
+            raise ParameterError(f"subpixel bits must be an integer 0 .. {MAX_SUBPIXEL_BITS}, "
+                                 f"not {self.subpixel_bits!r}")
 
     def _resolve_penalties(self):
         """Validate the SGM penalties and store the defaults in place of ``None``."""
@@ -293,6 +313,12 @@ class StereoParams:
     def disparity_bits(self):
         return (self.disparities - 1).bit_length()
 
+    @property
+    def output_disparity_bits(self):
+        """Width of the output disparity: the whole levels and F fractional bits (the
+        value is d 2^F + o <= (D - 1) 2^F, docs/semantics.md "Sub-pixel disparity")."""
+        return self.disparity_bits + self.subpixel_bits
+
     def describe(self):
         """One line for headers, logs and file names' documentation."""
         lr = "off" if self.lr_threshold is None else str(self.lr_threshold)
@@ -300,9 +326,10 @@ class StereoParams:
         buffer = "" if self.line_buffer == "auto" else f" LB={self.line_buffer}"
         lut = "" if self.lut_inputs == 4 else f" LUT{self.lut_inputs}"
         median = " median" if self.median else ""
+        fraction = f" F={self.subpixel_bits}" if self.subpixel_bits else ""
         return (f"{self.transform} {self.block}x{self.block} D={self.disparities} "
                 f"R={self.rounds} {self.describe_aggregation()} LR={lr}{median}{size}{buffer}"
-                f"{lut}")
+                f"{lut}{fraction}")
 
     def describe_aggregation(self):
         """The aggregation alone: ``A=3``, or ``SGM P1=24 P2=79 t=5`` (``t=off``)."""
