@@ -36,8 +36,9 @@ from .matching_cost import MatchingCost
 from .plan_structure import (centre_copies, cost_rows, masks_after_compare, row_sum_plan,
                              store_slices, transformed_rows, vertical_bits, window_first_row,
                              window_pixels)
-from .plan_timing import calculation_timing, unit_skews
+from .plan_timing import calculation_timing, neighbour_clocks, unit_skews
 from .sgm import SemiGlobalAggregation, guide_pixels
+from .subpixel import partition_leaves
 from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
 
@@ -82,6 +83,8 @@ class CalculationStage(wiring.Component):
         The aggregation centre of ``sums``, slot-aligned at ``sums_latency``.
     best_cost, best_disparity : Out
         The partition winner of the round, at offset ``latency``.
+    best_before, best_after : Out
+        With F > 0 (:mod:`.subpixel`): S(d-1) and S(d+1) of the partition winner d, with it.
     sums_latency, latency : int
         Clocks from the input to ``sums`` and to the partition winner.
     """
@@ -116,6 +119,9 @@ class CalculationStage(wiring.Component):
         centres = data.ArrayLayout(unsigned(8), copies * transformed_rows(params))
         keep = ({"keep": In(transformed_rows(params) * params.block * params.block)}
                 if after else {})
+        if params.subpixel_bits:
+            keep.update(best_before=Out(params.aggregated_cost_bits),
+                        best_after=Out(params.aggregated_cost_bits))
         super().__init__({**keep,
             "window_left": In(window), "window_right": In(window),
             "centres_left": In(centres), "centres_right": In(centres),
@@ -164,13 +170,20 @@ class CalculationStage(wiring.Component):
 
         # WTA of the partition: unit i's leaf carries i, to which the round's first disparity
         # j*D/R is added at the root (ties keep the lowest unit, i.e. the lowest disparity).
+        # With F > 0 the leaves carry the neighbours S(d-1), S(d+1) (.subpixel).
         index_shape = unsigned(bits_for(p.per_round - 1))
-        leaves = [(aggregation.sums[i], Const(i, index_shape)) for i in range(p.per_round)]
-        best_cost, best_unit = build_min_tree(m, 1, leaves, name="partition")
-        first_disparity = round_base(m, slots, self.sums_latency + self.min_latency,
-                                     p.per_round)
-        m.d.sync += [self.best_cost.eq(best_cost),
-                     self.best_disparity.eq(first_disparity + best_unit)]
+        if p.subpixel_bits:
+            leaves = partition_leaves(m, aggregation.sums, index_shape, p)
+        else:
+            leaves = [(aggregation.sums[i], Const(i, index_shape))
+                      for i in range(p.per_round)]
+        best = build_min_tree(m, 1, leaves, name="partition")
+        first_disparity = round_base(
+            m, slots, self.sums_latency + neighbour_clocks(p) + self.min_latency, p.per_round)
+        m.d.sync += [self.best_cost.eq(best[0]),
+                     self.best_disparity.eq(first_disparity + best[1])]
+        if p.subpixel_bits:
+            m.d.sync += [self.best_before.eq(best[2]), self.best_after.eq(best[3])]
         return m
 
     def _windows_above(self, m, tl, tr):

@@ -47,6 +47,7 @@ from .plan_structure import masks_after_compare
 from .plan_timing import core_timing, latency
 from .stream import PixelPair, disparity_word, framed
 from .stream_parts import InputQueue, RegisterSlice
+from .subpixel import SubpixelFit
 from .trees import DEFAULT_EVERY
 
 __all__ = ["NpStereoCore"]
@@ -97,6 +98,8 @@ class NpStereoCore(wiring.Component):
         self.input_stage = InputStage(params)
         self.calculation_stage = CalculationStage(params, every, timing.calculation)
         self.evaluation_stage = EvaluationStage(params)
+        #: With F > 0: the sub-pixel fit between the evaluation stage and the L/R check.
+        self.subpixel = SubpixelFit(params) if params.subpixel_bits else None
         # Offsets (clocks after admission) where each stage's input is slot-aligned.
         self.calculation_at, self.sums_at = timing.calculation, timing.sums
         self.evaluation_at = timing.evaluation
@@ -394,8 +397,19 @@ class NpStereoCore(wiring.Component):
             ev.round.eq(slots.round(self.evaluation_at)),
             lr.sums.eq(calc.sums), lr.tag.eq(calc.centre),
             lr.first.eq(slots.first(self.sums_at)), lr.round.eq(slots.round(self.sums_at)),
-            lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out),
         ]
+        if self.subpixel is None:
+            m.d.comb += [lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out)]
+        else:
+            m.submodules.subpixel = fit = self.subpixel
+            fit_at = self.evaluation_at + ev.latency
+            m.d.comb += [ev.before.eq(calc.best_before), ev.after.eq(calc.best_after)]
+            m.d.comb += [
+                fit.disparity.eq(ev.disparity_out), fit.centre.eq(ev.cost_out),
+                fit.before.eq(ev.before_out), fit.after.eq(ev.after_out),
+                lr.disparity.eq(fit.disparity_out), lr.value.eq(fit.value),
+                lr.left_tag.eq(slots.delay(ev.tag_out, fit_at, fit.latency, "subpixel_tag")),
+            ]
         if masks_after_compare(p):
             m.d.comb += calc.keep.eq(inp.keep)
         return m

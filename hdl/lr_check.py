@@ -69,6 +69,9 @@ class LRCheck(wiring.Component):
         Slot timing at the input.
     disparity, left_tag : In
         dL of the position ``left_tag`` (from the evaluation stage), at ``left_offset``.
+    value : In(output_disparity_bits)
+        With F > 0: the output disparity of dL (:mod:`.subpixel`), with it; the check
+        compares the whole levels ``disparity``, the word carries ``value``.
     retire : Out(1)
         One pulse per slot with a position, at offset ``latency``.
     produce : Out(1)
@@ -91,14 +94,16 @@ class LRCheck(wiring.Component):
         self.latency = timing.latency
         d_bits = bits_for(depth - 1)
         layout = tag_layout(params)
-        super().__init__({
+        out_bits = params.output_disparity_bits
+        fraction = {"value": In(out_bits)} if params.subpixel_bits else {}
+        super().__init__({**fraction,
             "sums": In(data.ArrayLayout(unsigned(params.aggregated_cost_bits), units)),
             "tag": In(layout),
             "first": In(1), "round": In(bits_for(rounds - 1)),
             "disparity": In(d_bits),
             "left_tag": In(layout),
             "retire": Out(1), "produce": Out(1),
-            "valid": Out(1), "disparity_out": Out(d_bits),
+            "valid": Out(1), "disparity_out": Out(out_bits),
             "x": Out(layout["x"].shape), "y": Out(layout["y"].shape),
             "frame_start": Out(1), "line_end": Out(1), "frame_end": Out(1),
         })
@@ -118,13 +123,18 @@ class LRCheck(wiring.Component):
             with m.Else():
                 m.d.sync += [self.retire.eq(0), self.produce.eq(0)]
             m.d.sync += [self.valid.eq(tag.x >= p.first_valid_column),
-                         self.disparity_out.eq(self.disparity),
+                         self.disparity_out.eq(self.value if p.subpixel_bits
+                                                else self.disparity),
                          self.x.eq(tag.x), self.y.eq(tag.y),
                          self.frame_start.eq((tag.x == 0) & (tag.y == 0)),
                          self.line_end.eq(tag.x == p.width - 1),
                          self.frame_end.eq((tag.x == p.width - 1) & (tag.y == p.height - 1))]
             return m
         final, leaving = self._right_winners(m, slots)
+        # Waiting for late left winners (lr_exit_delay): the final dR and its pulse.
+        wait = self.exit - (lr_stage_b(p) + p.rounds)
+        final, leaving = pipe(m, final, wait, "right_final_wait"), pipe(
+            m, leaving, wait, "right_final_valid_wait", reset=True)
         self._check(m, slots, final, leaving)
         return m
 
@@ -246,7 +256,8 @@ class LRCheck(wiring.Component):
         index_shape = unsigned(bits_for(size - 1))
 
         # The left winners, stored by position index.
-        waiting_layout = data.StructLayout({"tag": layout, "d": unsigned(d_bits)})
+        fraction = {"value": unsigned(p.output_disparity_bits)} if p.subpixel_bits else {}
+        waiting_layout = data.StructLayout({"tag": layout, "d": unsigned(d_bits), **fraction})
         # Both are block RAM (ram_style): as LUT RAM, the read address passed a LUT RAM
         # and its multiplexers before the output register (census 7x7 on ECP5: 8.3 ns).
         ram = {"no_rw_check": 1, "ram_style": "block"}
@@ -258,7 +269,8 @@ class LRCheck(wiring.Component):
         with m.If(arriving):
             m.d.sync += left_count.eq(left_count + 1)
         m.d.comb += [left_write.addr.eq(left_count), left_write.en.eq(arriving),
-                     left_write.data.eq(Cat(self.left_tag, self.disparity))]
+                     left_write.data.eq(Cat(self.left_tag, self.disparity,
+                                            *([self.value] if p.subpixel_bits else [])))]
 
         # dR leaving the chain belongs to position n - D + 1 when position n leaves it;
         # then the left winner of position n - D has all its partners.
@@ -317,7 +329,7 @@ class LRCheck(wiring.Component):
             self.retire.eq(stage[0]),
             self.produce.eq(stage[0] & stage[1] & in_frame),
             self.valid.eq(kept),
-            self.disparity_out.eq(checked.d),
+            self.disparity_out.eq(checked.value if p.subpixel_bits else checked.d),
             self.x.eq(tag.x), self.y.eq(tag.y),
             self.frame_start.eq((tag.x == 0) & (tag.y == 0)),
             self.line_end.eq(tag.x == p.width - 1),

@@ -22,8 +22,9 @@ __all__ = ["output_width", "transform_plan", "census_registers_compared",
 
 
 def output_width(params):
-    """Width of ``m_axis_tdata``: disparity bits plus the valid flag, in whole bytes."""
-    return 8 * -(-(params.disparity_bits + 1) // 8)
+    """Width of ``m_axis_tdata``: the output disparity's bits (with F fractional ones) plus
+    the valid flag, in whole bytes."""
+    return 8 * -(-(params.output_disparity_bits + 1) // 8)
 
 
 def _unit_plan(tree, params, every, depth):

@@ -145,7 +145,20 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     sums = vertical + aggregation_latency(params, every) + (0 if params.is_sgm else skew)
     min_tree = min_tree_clocks(params)
     return CalculationTiming(transformed, stored, costed, skew, vertical, sums, min_tree,
-                             sums + min_tree + 1)
+                             sums + neighbour_clocks(params) + min_tree + 1)
+
+
+def neighbour_clocks(params):
+    """Clocks by which the partition's WTA takes the sums late to carry the winner's
+    neighbours (hdl/subpixel.py): one with F > 0 and R > 1, where the next round's
+    unit 0 is the last unit's d + 1."""
+    return 1 if params.subpixel_bits and params.rounds > 1 else 0
+
+
+def subpixel_clocks(params):
+    """Clocks of the sub-pixel fit (:class:`~.subpixel.SubpixelFit`), 0 without it: the
+    differences, their sum, the numerator, the F + 1 stages of the divider, the value."""
+    return params.subpixel_bits + 5 if params.subpixel_bits else 0
 
 
 # Semi-global aggregation (hdl/sgm.py) -----------------------------------------------------
@@ -301,6 +314,15 @@ def lr_stage_b(params):
     return LR_STAGE_A + (2 if params.rounds >= 3 else 1)
 
 
+def lr_exit_delay(params, left):
+    """Clocks by which the final dR waits before the check: the left winner of position n
+    must be in its store (written at ``left``) before position n + D leaves the chain, at
+    least D R clocks later. Only the sub-pixel fit (:func:`subpixel_clocks`) brings the
+    left winners late enough for that, at small D R; otherwise 0."""
+    return max(0, left + 1 - (lr_stage_b(params) + params.rounds) - params.disparities
+               * params.rounds)
+
+
 @dataclass(frozen=True)
 class LRTiming:
     """Offsets inside the L/R check, in clocks after its input (the aggregated sums)."""
@@ -325,7 +347,7 @@ def lr_timing(params, left):
     if not params.lr_check:
         return LRTiming(left, 0, 0, left + 1)
     rounds = params.rounds
-    exit_ = lr_stage_b(params) + rounds
+    exit_ = lr_stage_b(params) + rounds + lr_exit_delay(params, left)
     ahead = max(-(-(exit_ - left) // rounds) + 1, 0)
     history = 1 << (params.disparities + ahead + 7 - 1).bit_length()
     return LRTiming(left, exit_, history, exit_ + 9)
@@ -350,7 +372,7 @@ def core_timing(params, every=DEFAULT_EVERY):
     timing = calculation_timing(params, every)
     sums = calculation + timing.sums
     evaluation = calculation + timing.latency
-    left = evaluation + evaluation_latency(params)
+    left = evaluation + evaluation_latency(params) + subpixel_clocks(params)
     output = sums + lr_timing(params, left - sums).latency
     if params.median:
         output += MEDIAN_LATENCY

@@ -26,12 +26,13 @@ class PixelPair(data.Struct):
 
 
 def disparity_word(params):
-    """One output word: the disparity (0 where invalid) from bit 0, the valid flag in the
+    """One output word: the disparity (0 where invalid; with F > 0 fractional bits scaled
+    by 2^F, docs/semantics.md "Sub-pixel disparity") from bit 0, the valid flag in the
     top bit of :func:`~.plan_structure.output_width` (whole bytes, as video IP expects); the bits
     between are 0."""
     size = output_width(params)
     return data.FlexibleLayout(size, {
-        "disparity": data.Field(unsigned(params.disparity_bits), 0),
+        "disparity": data.Field(unsigned(params.output_disparity_bits), 0),
         "valid": data.Field(unsigned(1), size - 1)})
 
 
@@ -104,6 +105,6 @@ class WordCodec:
             return -1
         disparity = int(self.unpack_disparity(word))
         if disparity >= 0 and int(self.pack_disparity(disparity)[0]) == word \
-                and disparity < self.params.disparities:
+                and disparity <= (self.params.disparities - 1) << self.params.subpixel_bits:
             return disparity
         return hex(word)
