@@ -9,18 +9,21 @@ from dataclasses import dataclass
 from ..golden.data import to_gray
 from ..golden.degrade import bayer_pair, gaussian_noise_pair
 from ..golden.pipeline import disparity_map
+from ..golden.subpixel import levels
 from ..params import UserError
 
 __all__ = ["match_images", "Condition", "condition_images", "run_jobs"]
 
 
 def match_images(left, right, params, threads=None):
-    """Disparity map (int16, -1 invalid) of two 8-bit images, colour converted to gray.
+    """Disparity map (int16, -1 invalid; with F > 0 sub-pixel bits float32 levels, -1
+    invalid) of two 8-bit images, colour converted to gray.
 
     Raises a UserError for images of different size or narrower than the disparity range
     (the golden model checks both).
     """
-    return disparity_map(to_gray(left), to_gray(right), params, threads=threads).disparity
+    result = disparity_map(to_gray(left), to_gray(right), params, threads=threads)
+    return levels(result.disparity, params.subpixel_bits)
 
 
 @dataclass(frozen=True)

@@ -47,7 +47,9 @@ def header(params):
         f"  width={params.width} height={params.height} rows above kept as {rows}"
         f" lut_inputs={params.lut_inputs}",
         f"  s_axis_tdata[15:0] = {{right, left}}; m_axis_tdata[{output_width(params) - 1}:0]"
-        f" = {{valid, 0..., disparity[{params.disparity_bits - 1}:0]}}",
+        f" = {{valid, 0..., disparity[{params.output_disparity_bits - 1}:0]}}"
+        + (f", the disparity times 2^{params.subpixel_bits} ({params.subpixel_bits} fractional"
+           " bits)" if params.subpixel_bits else ""),
         f"  one output word per input pixel; {params.rounds} clock(s) per pixel; "
         f"flush after the last frame {latency(params)} pixels",
     ]

@@ -17,7 +17,8 @@ import tempfile
 from pathlib import Path
 
 from ..flow.tools import ENGINES
-from ...params import (LINE_BUFFERS, LUT_INPUTS, P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT,
+from ...params import (LINE_BUFFERS, LUT_INPUTS, MAX_SUBPIXEL_BITS, P2_ADAPT_OFF, SGM,
+                       SGM_DEFAULT_ADAPT,
                        SGM_DEFAULT_P1, SGM_DEFAULT_P2, SGM_MAX_ADAPT, TRANSFORMS, StereoParams,
                        UserError, max_path_penalty)
 
@@ -46,7 +47,7 @@ def aggregation_value(text):
 
 
 def add_matching_arguments(parser, many=False, max_block=None, max_disparities=None,
-                           positionals=False, defaults=None):
+                           positionals=False, defaults=None, subpixel=False):
     """Options of the matching pipeline; with ``many``, transform, block and aggregation
     take lists (a grid of configurations).
 
@@ -60,6 +61,8 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
     (:mod:`npstereo.hdl.plan`), named in the help; the golden model has none.
     ``defaults``: a command's own defaults of ``disparities`` and ``rounds`` (in the help
     too), instead of :data:`STEREO_DEFAULTS`'.
+    ``subpixel``: the command takes ``--subpixel-bits`` (the commands whose outputs carry
+    the fraction).
     """
     count = "+" if many else None
     transform, block = STEREO_DEFAULTS["transform"], STEREO_DEFAULTS["block"]
@@ -90,6 +93,13 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
                         help="3x3 median of the output map after the L/R check (invalid "
                              "pixels filled from five valid neighbours; docs/semantics.md) "
                              "(default off)")
+    if subpixel:
+        parser.add_argument("--subpixel-bits", type=int, metavar="F",
+                            default=STEREO_DEFAULTS["subpixel_bits"],
+                            help=f"fractional bits of the disparity, 0 <= F <= "
+                                 f"{MAX_SUBPIXEL_BITS}: a parabola through the winner's and "
+                                 f"its neighbours' summed costs; 0 gives whole levels "
+                                 f"(default {STEREO_DEFAULTS['subpixel_bits']})")
     census7 = StereoParams(transform="census", block=7)
     sgm = parser.add_argument_group("semi-global aggregation (only with --aggregation sgm)")
     sgm.add_argument("--p1", type=int, metavar="N",
@@ -218,7 +228,8 @@ def params_from_args(args, transform=None, block=None, aggregation=None):
         line_buffer=getattr(args, "line_buffer", STEREO_DEFAULTS["line_buffer"]),
         lut_inputs=getattr(args, "lut_inputs", STEREO_DEFAULTS["lut_inputs"]),
         p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
-        p2_adapt=adapt if sgm else None, median=getattr(args, "median", False))
+        p2_adapt=adapt if sgm else None, median=getattr(args, "median", False),
+        subpixel_bits=getattr(args, "subpixel_bits", STEREO_DEFAULTS["subpixel_bits"]))
 
 
 def check_output_folder(value, option="--out"):

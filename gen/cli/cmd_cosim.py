@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from ...golden.data import load_middlebury, to_gray
 from ...golden.pipeline import disparity_map
+from ...golden.subpixel import levels
 from ...golden.synthetic import synthetic_pair
 from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
 from ...hdl.verilog import TOP_NAME, core_verilog
@@ -113,8 +114,9 @@ def run(args):
     seconds = time.perf_counter() - start
     _, comparison = result.frames[0]
     hardware_png, golden_png = out / "hardware.png", out / "golden.png"
-    save_disparity_png(hardware_png, result.disparity, params.disparities - 1)
-    save_disparity_png(golden_png, golden, params.disparities - 1)
+    save_disparity_png(hardware_png, levels(result.disparity, params.subpixel_bits),
+                       params.disparities - 1)
+    save_disparity_png(golden_png, levels(golden, params.subpixel_bits), params.disparities - 1)
     print_verdict(comparison, result.cycles, pixels, args.clock_mhz)
     synthesis = "" if netlist is None else f"{netlist.seconds:.1f} s synthesis, "
     print(f"time:             {seconds:.1f} s ({synthesis}{result.build_seconds:.1f} s "
@@ -133,7 +135,7 @@ def add_arguments(parser):
     source.add_argument("--synthetic", action="store_true",
                         help="a seeded synthetic scene instead of a dataset")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scene")
-    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES, subpixel=True)
     add_hardware_arguments(parser)
     parser.add_argument("--crop", help="simulate only the central WIDTHxHEIGHT pixels "
                         f"(the hardware takes at most {MAX_WIDTH} columns)")

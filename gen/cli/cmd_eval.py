@@ -93,7 +93,7 @@ def add_arguments(parser):
     source.add_argument("--dataset", metavar="DIR", help="Middlebury scene folder")
     source.add_argument("--synthetic", action="store_true",
                         help="the embedded synthetic scene (seeded by --seed)")
-    add_matching_arguments(parser, many=True)
+    add_matching_arguments(parser, many=True, subpixel=True)
     add_condition_arguments(parser)
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     parser.set_defaults(run=run)

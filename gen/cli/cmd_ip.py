@@ -45,7 +45,7 @@ def run(args):
 
 
 def add_arguments(parser):
-    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES, subpixel=True)
     add_hardware_arguments(parser)
     parser.add_argument("--width", type=int, help=f"image width W, at most {MAX_WIDTH}")
     parser.add_argument("--height", type=int, help="image height H")

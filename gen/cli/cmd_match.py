@@ -15,9 +15,12 @@ DESCRIPTION = ("Compute the left-referenced disparity map of a rectified stereo 
 
 
 def save_raw(path, disparity):
-    """Write the int16 map (-1 invalid) as a .npy file, atomically."""
+    """Write the map as a .npy file, atomically: int16 levels (-1 invalid), or with
+    sub-pixel bits float32 levels (-1 invalid)."""
+    disparity = np.asarray(disparity)
+    dtype = np.int16 if np.issubdtype(disparity.dtype, np.integer) else np.float32
     with atomic_path(path, suffix=".npy") as tmp, open(tmp, "wb") as handle:
-        np.save(handle, np.asarray(disparity, dtype=np.int16))
+        np.save(handle, disparity.astype(dtype, copy=False))
 
 
 def run(args):
@@ -38,8 +41,9 @@ def run(args):
 def add_arguments(parser):
     parser.add_argument("left", help="left (reference) image, 8-bit gray or RGB")
     parser.add_argument("right", help="right image, same size")
-    add_matching_arguments(parser, positionals=True)
+    add_matching_arguments(parser, positionals=True, subpixel=True)
     parser.add_argument("--out", required=True,
                         help="colour-mapped disparity PNG (invalid pixels black)")
-    parser.add_argument("--raw", help="also write the H x W int16 map (-1 invalid) as .npy")
+    parser.add_argument("--raw", help="also write the H x W map as .npy: int16 levels, or "
+                                      "float32 levels with --subpixel-bits > 0; -1 invalid")
     parser.set_defaults(run=run)

@@ -172,7 +172,7 @@ def _write_sweep(reports, out, sweep="paper"):
 
 
 def add_arguments(parser):
-    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES, subpixel=True)
     add_hardware_arguments(parser)
     parser.add_argument("--width", type=int,
                         help=f"image width, at most {MAX_WIDTH} (required without --paper)")

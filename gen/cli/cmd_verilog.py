@@ -27,7 +27,7 @@ def run(args):
 
 
 def add_arguments(parser):
-    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES)
+    add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES, subpixel=True)
     add_hardware_arguments(parser)
     parser.add_argument("--width", type=int, required=True,
                         help=f"image width W, at most {MAX_WIDTH}")
