@@ -6,7 +6,7 @@ import numpy as np
 
 from ..params import UserError
 
-__all__ = ["Quality", "evaluate"]
+__all__ = ["Quality", "evaluate", "mean_absolute_error"]
 
 
 @dataclass(frozen=True)
@@ -65,3 +65,17 @@ def evaluate(disparity, ground_truth, disparities, tolerance=1):
     return Quality(correct=100.0 * correct / total, density=100.0 * n_valid / total,
                    error_rate=100.0 * (n_valid - correct) / n_valid if n_valid else 0.0,
                    evaluated=total)
+
+
+def mean_absolute_error(disparity, ground_truth, disparities, tolerance=1):
+    """Mean |d - gt| over the correct pixels of :func:`evaluate` (kept, known ground truth,
+    x >= D, within ``tolerance``): how close the good matches are, which whole levels
+    cannot bring below about a quarter of a level and a sub-pixel fraction can; NaN when
+    no pixel is correct."""
+    disparity = np.asarray(disparity, dtype=np.float64)
+    ground_truth = np.asarray(ground_truth, dtype=np.float64)
+    evaluated = ~np.isnan(ground_truth)
+    evaluated[:, :disparities] = False
+    error = np.abs(disparity - np.nan_to_num(ground_truth))
+    good = evaluated & (disparity >= 0) & (error <= tolerance)
+    return float(error[good].mean()) if good.any() else float("nan")

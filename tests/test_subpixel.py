@@ -18,7 +18,10 @@ from math import floor
 import numpy as np
 import pytest
 from amaranth.sim import Simulator
+from PIL import Image
 
+from npstereo.gen.cli.main import main
+from npstereo.gen.ip.ports import stream_ports
 from npstereo.golden import aggregation as golden_aggregation
 from npstereo.golden import subpixel
 from npstereo.golden.matching_cost import matching_costs
@@ -268,3 +271,65 @@ def test_broken_cocotb_rounding_is_caught(simulator, monkeypatch):
                         a << (bits + 1))
     result = cosim.run_stream(simulator, COCOTB, _frames(), PLAN)
     assert not result.ok and result.mismatches > 0
+
+
+# The commands ------------------------------------------------------------------------------
+
+def _pair_files(tmp_path):
+    left, right = stereo_pair("layers", 12, 40, 3, 8)
+    paths = tmp_path / "left.png", tmp_path / "right.png"
+    for path, image in zip(paths, (left, right)):
+        Image.fromarray(image).save(path)
+    return [str(path) for path in paths], (left, right)
+
+
+@pytest.mark.parametrize("command", ["match", "eval", "verilog", "cosim", "report", "ip"])
+@pytest.mark.parametrize("bits", ["6", "-1"])
+def test_out_of_range_bits_are_one_line_errors(capsys, tmp_path, command, bits):
+    (left, right), _ = _pair_files(tmp_path)
+    small = ["--block", "3", "--disparities", "8", "--subpixel-bits", bits]
+    size = ["--width", "16", "--height", "4"]
+    argv = {"match": ["match", left, right, *small, "--out", str(tmp_path / "m.png")],
+            "eval": ["eval", "--synthetic", *small],
+            "verilog": ["verilog", *small, *size, "--out", str(tmp_path / "c.v")],
+            "cosim": ["cosim", "--simulator", "amaranth", "--synthetic", *small, "--crop",
+                      "16x4", "--out", str(tmp_path / "cosim")],
+            "report": ["report", *small, *size],
+            "ip": ["ip", *small, *size, "--out", str(tmp_path / "ip")]}[command]
+    before = sorted(tmp_path.rglob("*"))
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert lines == [f"npstereo: error: subpixel bits must be an integer 0 .. 5, not {bits}"]
+    assert "Traceback" not in captured.err + captured.out
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_match_raw_is_float_levels(capsys, tmp_path):
+    (left, right), pair = _pair_files(tmp_path)
+    base = ["match", left, right, "--block", "3", "--disparities", "8", "--aggregation", "sgm",
+            "--p1", "3", "--p2", "20"]
+    for bits in (0, 4):
+        raw = tmp_path / f"raw{bits}.npy"
+        assert main([*base, "--subpixel-bits", str(bits), "--out", str(tmp_path / "m.png"),
+                     "--raw", str(raw)]) == 0
+    whole, fine = np.load(tmp_path / "raw0.npy"), np.load(tmp_path / "raw4.npy")
+    assert whole.dtype == np.int16 and fine.dtype == np.float32
+    expected = disparity_map(*pair, StereoParams(transform="census", block=3, disparities=8,
+                                                 aggregation="sgm", p1=3, p2=20,
+                                                 subpixel_bits=4)).disparity
+    assert np.array_equal(fine, np.where(expected >= 0, expected / 16, -1))
+    assert np.array_equal(fine < 0, whole < 0) and np.abs(fine - whole).max() <= 0.5
+    assert (fine != np.round(fine)).any()
+
+
+def test_verilog_and_ip_widths(tmp_path):
+    argv = ["--block", "3", "--disparities", "64", "--subpixel-bits", "4", "--width", "80",
+            "--height", "4"]
+    assert main(["verilog", *argv, "--out", str(tmp_path / "core.v")]) == 0
+    text = (tmp_path / "core.v").read_text()
+    assert "m_axis_tdata[15:0] = {valid, 0..., disparity[9:0]}" in text
+    assert "output [15:0] m_axis_tdata" in text
+    ports = {port.name: port.width for port in stream_ports(
+        StereoParams(disparities=64, subpixel_bits=4, width=80, height=4), "m_axis")}
+    assert ports["m_axis_tdata"] == 16

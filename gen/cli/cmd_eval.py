@@ -3,7 +3,7 @@
 import json
 
 from ...golden.data import load_middlebury
-from ...golden.quality import evaluate
+from ...golden.quality import evaluate, mean_absolute_error
 from ...golden.synthetic import synthetic_pair
 from ...params import UserError
 from ..atomic import write_text
@@ -66,7 +66,11 @@ def run(args):
                      "p2_adapt": p.p2_adapt, "median": p.median,
                      "aggregation_label": p.describe_aggregation()
                      + (", 3x3 median" if p.median else ""),
-                     "lr_threshold": p.lr_threshold, **quality.as_dict(), "seconds": seconds})
+                     "lr_threshold": p.lr_threshold, **quality.as_dict(),
+                     "subpixel_bits": p.subpixel_bits,
+                     "mean_abs_error": mean_absolute_error(disparity, pair.ground_truth,
+                                                           p.disparities),
+                     "seconds": seconds})
     print(f"{pair.name} ({left.shape[1]}x{left.shape[0]}), D={args.disparities}, "
           f"{condition.label}")
     print(format_table(rows))
