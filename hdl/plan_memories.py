@@ -60,7 +60,10 @@ def memories(params, every=DEFAULT_EVERY):
         if rounds > 1:
             result.append(MemoryUse("right winners", units, rounds,
                                     p.aggregated_cost_bits + d_bits + 1))
-        result.append(MemoryUse("left winners", 1, history, tag_layout(p).size + d_bits))
+        # With the sub-pixel fit the output value waits beside the level it is checked by.
+        value = p.output_disparity_bits if p.subpixel_bits else 0
+        result.append(MemoryUse("left winners", 1, history,
+                                tag_layout(p).size + d_bits + value))
         result.append(MemoryUse("dR history", 1, history, d_bits))
     if p.median:
         # Median3's line buffers: the entry (key of d_bits + 1, word flag, four edge

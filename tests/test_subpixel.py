@@ -21,6 +21,7 @@ from amaranth.sim import Simulator
 from PIL import Image
 
 from npstereo.gen.cli.main import main
+from npstereo.gen.flow.synthesise import synthesise
 from npstereo.gen.ip.ports import stream_ports
 from npstereo.golden import aggregation as golden_aggregation
 from npstereo.golden import subpixel
@@ -28,8 +29,10 @@ from npstereo.golden.matching_cost import matching_costs
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.transform import transform
 from npstereo.hdl import subpixel as hdl_subpixel
+from npstereo.hdl.plan_memories import memories, memory_bits
 from npstereo.hdl.plan_structure import output_width
 from npstereo.hdl.subpixel import SubpixelFit
+from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import ParameterError, StereoParams
 from npstereo.sim import cosim
 
@@ -333,3 +336,14 @@ def test_verilog_and_ip_widths(tmp_path):
     ports = {port.name: port.width for port in stream_ports(
         StereoParams(disparities=64, subpixel_bits=4, width=80, height=4), "m_axis")}
     assert ports["m_axis_tdata"] == 16
+
+
+def test_memory_formula_matches_yosys():
+    """The left winners' store keeps the value beside the level: ``npstereo report``'s
+    architecture bits are what Yosys finds; without the value's bits they are not."""
+    params = COCOTB
+    result = synthesise(core_verilog(params), "cyclonev", TOP_NAME)
+    assert result["status"] == "ok", result
+    assert result["memory_bits"] == memory_bits(params)
+    history = next(m for m in memories(params) if m.name == "left winners").depth
+    assert result["memory_bits"] != memory_bits(params) - history * params.output_disparity_bits
