@@ -22,6 +22,7 @@ from PIL import Image
 
 from npstereo.gen.cli.main import main
 from npstereo.gen.flow.synthesise import synthesise
+from npstereo.gen.ip.generator import gapi_arguments
 from npstereo.gen.ip.ports import stream_ports
 from npstereo.golden import aggregation as golden_aggregation
 from npstereo.golden import subpixel
@@ -347,3 +348,8 @@ def test_memory_formula_matches_yosys():
     assert result["memory_bits"] == memory_bits(params)
     history = next(m for m in memories(params) if m.name == "left winners").depth
     assert result["memory_bits"] != memory_bits(params) - history * params.output_disparity_bits
+
+
+def test_fusesoc_generator_takes_the_bits():
+    argv = gapi_arguments({"vlnv": "a:b:c:0", "parameters": {"subpixel_bits": 4}})
+    assert argv[-2:] == ["--subpixel-bits", "4"]

@@ -30,7 +30,8 @@ GENERATOR_VLNV = "npstereo:stereo:generator:0"
 #: flags ``--no-lr-check`` and ``--no-p2-adapt`` are given as ``lr_threshold: off`` and
 #: ``p2_adapt: off``.
 PARAMETERS = ("transform", "block", "disparities", "rounds", "aggregation", "lr_threshold",
-              "line_buffer", "lut_inputs", "width", "height", "p1", "p2", "p2_adapt")
+              "line_buffer", "lut_inputs", "width", "height", "p1", "p2", "p2_adapt",
+              "subpixel_bits")
 _OFF = {"lr_threshold": "--no-lr-check", "p2_adapt": "--no-p2-adapt"}
 
 _SCRIPT = '''\
