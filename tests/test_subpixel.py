@@ -6,9 +6,10 @@ and random ones; the box pipeline's neighbours (gathered a disparity at a time) 
 the fit of its whole S volume; the maps' whole levels against F = 0. The hardware:
 :class:`~npstereo.hdl.subpixel.SubpixelFit` on random vectors, whole frames through the
 core in Amaranth's simulator for F = 1, 4, 5 at R = 1 and R > 1, SGM and box, one cocotb
-run on Icarus and one on Verilator. ``test_broken_*`` put a wrong rule into the hardware
-or the model (rounding down instead of half up, the neighbour across a round's edge from
-the wrong clock) and show that the same comparison catches it.
+run on Icarus and one on Verilator, the L/R check waiting for left winners that the fit
+makes late. ``test_broken_*`` put a wrong rule into the hardware or the model (rounding
+down instead of half up, the neighbour across a round's edge from the wrong clock, the
+check a clock too early) and show that the same comparison catches it.
 """
 
 import random
@@ -29,9 +30,11 @@ from npstereo.golden import subpixel
 from npstereo.golden.matching_cost import matching_costs
 from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.transform import transform
+from npstereo.hdl import plan_timing
 from npstereo.hdl import subpixel as hdl_subpixel
 from npstereo.hdl.plan_memories import memories, memory_bits
 from npstereo.hdl.plan_structure import output_width
+from npstereo.hdl.plan_timing import core_timing
 from npstereo.hdl.subpixel import SubpixelFit
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import ParameterError, StereoParams
@@ -244,6 +247,31 @@ def test_broken_round_edge_is_caught(monkeypatch):
                         lambda m, current, sums: (current[-1], current[0]))
     params = _core("sgm", 4, 4)
     pair = stereo_pair("layers", params.height, params.width, 6, 8)
+    with pytest.raises(AssertionError, match="pixels differ"):
+        check_frames(params, [pair], frame_beats(*pair))
+
+
+def _late_winners():
+    """D = 3, R = 1, F = 5: the left winners come after the right chain's exit, and
+    without gaps every position follows the one before at once."""
+    params = StereoParams(transform="census", block=3, disparities=3, rounds=1, aggregation=1,
+                          lr_threshold=0, width=20, height=4, subpixel_bits=5)
+    assert plan_timing.lr_exit_delay(params, core_timing(params).left
+                                     - core_timing(params).sums) > 0
+    return params, stereo_pair("independent", 4, 20, 3, 3)
+
+
+def test_late_left_winners_are_waited_for():
+    params, pair = _late_winners()
+    check_frames(params, [pair], frame_beats(*pair))
+
+
+def test_broken_lr_wait_is_caught(monkeypatch):
+    """The final dR a clock too early: the check reads a left winner not yet written."""
+    delay = plan_timing.lr_exit_delay
+    monkeypatch.setattr(plan_timing, "lr_exit_delay",
+                        lambda params, left: max(0, delay(params, left) - 1))
+    params, pair = _late_winners()
     with pytest.raises(AssertionError, match="pixels differ"):
         check_frames(params, [pair], frame_beats(*pair))
 
