@@ -230,6 +230,13 @@ def test_core_matches_golden(aggregation, rounds, bits):
                  seed=bits)
 
 
+def test_core_with_median_matches_golden():
+    """The 3x3 median after the fraction: it takes the output values, F bits wider."""
+    params = _core("sgm", 2, 4).replace(height=6, median=True)
+    pair = stereo_pair("layers", params.height, params.width, 5, 8)
+    check_frames(params, [pair], frame_beats(*pair), valid_prob=0.7, ready_prob=0.7, seed=1)
+
+
 def test_broken_rounding_is_caught(monkeypatch):
     """The fit's numerator without its + (a + b): the quotient rounds down."""
     monkeypatch.setattr(hdl_subpixel, "numerator", lambda a, denominator, bits:
