@@ -9,13 +9,15 @@ its own output register, and the bank is chosen behind those registers
 :func:`~.plan_structure.bank_choice_levels`).
 """
 
-from amaranth.hdl import Array, Signal
+from types import SimpleNamespace
+
+from amaranth.hdl import Array, Cat, Shape, Signal, unsigned
 from amaranth.lib.memory import Memory
 
 from .common import pipe
 from .plan_structure import BANK_CHOICE
 
-__all__ = ["choose_bank", "banked_memory"]
+__all__ = ["choose_bank", "banked_memory", "BLOCK_RAM_MODES", "slice_widths", "line_memory"]
 
 
 def choose_bank(m, words, bank, name):
@@ -70,3 +72,50 @@ def banked_memory(m, name, shape, banks, read_address, write_address, write_data
     word = Signal(shape, name=f"{name}_word", reset_less=True)
     m.d.sync += word.eq(choose_bank(m, words, read_address[low:], f"{name}_bank"))
     return word
+
+
+#: (words, bits) of one ECP5 DP16KD in each of its shapes.
+BLOCK_RAM_MODES = ((512, 36), (1024, 18), (2048, 9), (4096, 4), (8192, 2), (16384, 1))
+
+
+def slice_widths(width, depth):
+    """Widths of the slices of a memory of ``depth`` words of ``width`` bits: as wide as one
+    block RAM is at that depth (all of it up to 512 words). Left whole, a memory deeper
+    than 512 words is a cascade of block RAMs with a multiplexer between them and its read
+    register, which then cannot be the block RAM's output register: the 1280-word input
+    line buffers were census 5x5's critical path at 1280 x 720 (the read, 5.83 ns, and the
+    cascade's multiplexer into the register, 10.2 ns)."""
+    if depth <= BLOCK_RAM_MODES[0][0]:
+        return [width]
+    bits = next((b for words, b in BLOCK_RAM_MODES if depth <= words), 1)
+    return [min(bits, width - low) for low in range(0, width, bits)]
+
+
+def line_memory(m, name, shape, depth):
+    """A memory of ``depth`` words of ``shape`` with a synchronous read port, cut into
+    :func:`slice_widths` slices (one memory of ``shape`` where one slice holds it). Returns
+    its ports as signals of ``shape``'s width: ``read_addr``, ``read_en`` (1 unless driven),
+    ``read_data``, ``write_addr``, ``write_data``, ``write_en``. No collision logic
+    (``no_rw_check``): the callers never read a word in the clock it is written."""
+    width = Shape.cast(shape).width
+    ports = SimpleNamespace(
+        read_addr=Signal(range(depth), name=f"{name}_read_addr"),
+        read_en=Signal(name=f"{name}_read_en", init=1),
+        read_data=Signal(width, name=f"{name}_read_data"),
+        write_addr=Signal(range(depth), name=f"{name}_write_addr"),
+        write_data=Signal(width, name=f"{name}_write_data"),
+        write_en=Signal(name=f"{name}_write_en"))
+    low, data = 0, []
+    widths = slice_widths(width, depth)
+    for k, bits in enumerate(widths):
+        memory = Memory(shape=shape if len(widths) == 1 else unsigned(bits), depth=depth,
+                        init=[], attrs={"no_rw_check": 1})
+        m.submodules[name if len(widths) == 1 else f"{name}_{k}"] = memory
+        read, write = memory.read_port(domain="sync"), memory.write_port()
+        m.d.comb += [read.addr.eq(ports.read_addr), read.en.eq(ports.read_en),
+                     write.addr.eq(ports.write_addr), write.en.eq(ports.write_en),
+                     write.data.eq(ports.write_data[low:low + bits])]
+        data.append(read.data)
+        low += bits
+    m.d.comb += ports.read_data.eq(Cat(*data))
+    return ports

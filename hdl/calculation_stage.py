@@ -27,10 +27,10 @@ only the stores are written, only in slots that carry a position.
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .aggregation import Aggregation
+from .banks import line_memory
 from .common import SlotClock, Store, bits_for, pipe, replica, round_base, tag_layout
 from .matching_cost import MatchingCost
 from .plan_structure import (centre_copies, cost_rows, masks_after_compare, row_sum_plan,
@@ -228,10 +228,7 @@ class CalculationStage(wiring.Component):
         if self.rows == 1:
             return [left], [right]
         above, bits = self.rows - 1, p.transform_bits
-        m.submodules.transform_lines = lines = Memory(
-            shape=unsigned(2 * above * bits), depth=p.width, init=[],
-            attrs={"no_rw_check": 1})
-        read, write = lines.read_port(domain="sync"), lines.write_port()
+        lines = line_memory(m, "transform_lines", 2 * above * bits, p.width)
         # Read the position's column in round 0 of slots with a position (the word then
         # stays on the read port); two clocks later the word has left the block RAM and the plain
         # register behind it (the RAM's own output register on ECP5), and at least one
@@ -239,15 +236,17 @@ class CalculationStage(wiring.Component):
         # 7.2 ns, census 9x9 on ECP5). The write-back of a
         # column comes `transformed` clocks after its read, and the column is read again a
         # row later: no collision logic (no_rw_check).
-        m.d.comb += [read.addr.eq(self.tag.x), read.en.eq(slots.first(0) & self.tag.valid)]
-        word = pipe(m, read.data, 1, "transform_lines_read")
+        m.d.comb += [lines.read_addr.eq(self.tag.x),
+                     lines.read_en.eq(slots.first(0) & self.tag.valid)]
+        word = pipe(m, lines.read_data, 1, "transform_lines_read")
         word = pipe(m, word, self.transformed - 2, "transform_lines_word")
         left_above = [word[k * bits:(k + 1) * bits] for k in range(above)]
         right_above = [word[(above + k) * bits:(above + k + 1) * bits] for k in range(above)]
         tag = slots.delay(self.tag, 0, self.transformed, "transform_lines_tag")
-        m.d.comb += [write.addr.eq(tag.x), write.en.eq(slots.first(self.transformed) & tag.valid),
-                     write.data.eq(Cat(left, *left_above[:above - 1],
-                                       right, *right_above[:above - 1]))]
+        m.d.comb += [lines.write_addr.eq(tag.x),
+                     lines.write_en.eq(slots.first(self.transformed) & tag.valid),
+                     lines.write_data.eq(Cat(left, *left_above[:above - 1],
+                                             right, *right_above[:above - 1]))]
         return [left, *left_above], [right, *right_above]
 
     def _right_stores(self, m, slots, newest, tag, before):

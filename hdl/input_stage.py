@@ -2,7 +2,7 @@
 
 Hardware counterpart of the golden model's zero-padded windows
 (:func:`npstereo.golden.transform.neighbour_planes`). Pixels arrive in raster order, one
-per admitted slot (``admit``). One :class:`~amaranth.lib.memory.Memory` per image (depth W,
+per admitted slot (``admit``). One line memory per image (:func:`.banks.line_memory`, depth W,
 B-1 pixels wide) holds the previous B-1 rows of every column, so each position yields a
 raster-continuous column of B pixels; a shift register of B columns forms the window.
 The window centre trails the newest pixel by r rows and r columns; a mask computed from the
@@ -14,9 +14,9 @@ masked windows with their centres' copies.
 
 from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from .banks import line_memory
 from .common import SlotClock, bits_for, pipe, tag_layout
 from .plan_structure import (centre_copies, masks_after_compare, transformed_rows,
                              window_first_row, window_pixels, window_rows)
@@ -181,20 +181,16 @@ class InputStage(wiring.Component):
             # Every read address differs from the address written in the same clock (the
             # write trails the read of the same column by two clocks, the next read of it
             # comes a row later), so Yosys needs no collision logic (no_rw_check).
-            m.submodules[f"lines_{name}"] = lines = Memory(
-                shape=unsigned(8 * (rows - 1)), depth=width, init=[],
-                attrs={"no_rw_check": 1})
-            read = lines.read_port(domain="sync")
-            write = lines.write_port()
+            lines = line_memory(m, f"lines_{name}", 8 * (rows - 1), width)
             # A plain register right behind the read port: the block RAM's own output
             # register on ECP5 (the flow packs it), 5 ns shorter than its bare output.
-            older_word = pipe(m, read.data, 1, f"{name}_read")
+            older_word = pipe(m, lines.read_data, 1, f"{name}_read")
             older = [older_word[8 * s:8 * s + 8] for s in range(rows - 1)]
             newest_pixel = pixel
             m.d.comb += [
-                read.addr.eq(address),
-                write.addr.eq(written_address), write.en.eq(admitted),
-                write.data.eq(Cat(newest_pixel, *older[:rows - 2])),
+                lines.read_addr.eq(address),
+                lines.write_addr.eq(written_address), lines.write_en.eq(admitted),
+                lines.write_data.eq(Cat(newest_pixel, *older[:rows - 2])),
             ]
             # Column c (0 = oldest, dx = -r) packs its pixels top (dy = -top) to bottom.
             columns = [Signal(8 * rows, name=f"{name}_column{c}", reset_less=True)

@@ -35,11 +35,11 @@ from functools import reduce
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import MEDIAN_FILL
-from .common import bits_for, pipe, tag_layout
+from .banks import line_memory
+from .common import pipe, tag_layout
 
 __all__ = ["sorting_network", "NETWORK", "network_layers", "MEDIAN_LATENCY", "Median3"]
 
@@ -237,13 +237,13 @@ class Median3(wiring.Component):
     def _line(self, m, name, value, tick, shape):
         """``value`` of W ticks back, a clock after ``tick`` (see the module docstring)."""
         width = self.params.width
-        m.submodules[name] = memory = Memory(shape=shape, depth=width, init=[],
-                                             attrs={"no_rw_check": 1})
-        read, write = memory.read_port(domain="sync"), memory.write_port()
+        memory = line_memory(m, name, shape, width)
         pointer = Signal(range(width), name=f"{name}_pointer")
         following = Mux(pointer == width - 1, 0, pointer + 1)
         with m.If(tick):
             m.d.sync += pointer.eq(following)
-        m.d.comb += [write.addr.eq(pointer), write.data.eq(value), write.en.eq(tick),
-                     read.addr.eq(Mux(tick, following, pointer))]
-        return pipe(m, read.data, 1, f"{name}_out")
+        m.d.comb += [memory.write_addr.eq(pointer), memory.write_data.eq(value),
+                     memory.write_en.eq(tick), memory.read_addr.eq(Mux(tick, following, pointer))]
+        out = Signal(shape, name=f"{name}_out", reset_less=True)
+        m.d.sync += out.eq(memory.read_data)
+        return out

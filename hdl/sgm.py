@@ -37,11 +37,10 @@ carry a position.
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
-from .banks import banked_memory
+from .banks import banked_memory, line_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, replica, \
     tag_layout, taps
 from .plan_structure import row_banks
@@ -357,14 +356,14 @@ class SemiGlobalAggregation(wiring.Component):
         running = [self._running_min(m, results[path], t.rows,
                                      f"sgm_{path.replace('-', '_')}_m") for path in SGM_ROW_PATHS]
         m.d.comb += [
-            minima_write.addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),
-            minima_write.data.eq(Cat(*running)),
-            minima_write.en.eq(slots.first(t.minima) & self._valid_at(t.minima))]
+            minima_write.write_addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),
+            minima_write.write_data.eq(Cat(*running)),
+            minima_write.write_en.eq(slots.first(t.minima) & self._valid_at(t.minima))]
         return results
 
     def _row_minima(self, m, p2, offset):
         """Per path from above, m of its predecessor and m + P2, slot-aligned at ``offset``;
-        and the minima memory's write port.
+        and the minima memory (:func:`.banks.line_memory`; the caller writes it).
 
         One word of the three minima per column; position x reads column x + 1 (0 after
         the last column, whose value is then the current row's first), a word top-right
@@ -374,13 +373,10 @@ class SemiGlobalAggregation(wiring.Component):
         p, t, slots = self.params, self.timing, self._slots
         bits = p.path_cost_bits
         x = self.tag.x
-        memory = Memory(shape=unsigned(3 * bits), depth=p.width, init=[],
-                        attrs={"no_rw_check": 1})
-        m.submodules.sgm_minima = memory
-        read, write = memory.read_port(domain="sync"), memory.write_port()
-        m.d.comb += read.addr.eq(register(m, Mux(x == p.width - 1, 0, x + 1),
-                                           range(p.width), "sgm_minima_address"))
-        word = dict(zip(SGM_ROW_PATHS, _lanes(register(m, read.data, 3 * bits,
+        memory = line_memory(m, "sgm_minima", 3 * bits, p.width)
+        m.d.comb += memory.read_addr.eq(register(m, Mux(x == p.width - 1, 0, x + 1),
+                                                  range(p.width), "sgm_minima_address"))
+        word = dict(zip(SGM_ROW_PATHS, _lanes(register(m, memory.read_data, 3 * bits,
                                                     "sgm_minima_word"), 3, bits)))
         # Column x + 1 for top-right now; for top as column x of the next position; for
         # top-left as column x - 1 two positions on.
@@ -402,4 +398,4 @@ class SemiGlobalAggregation(wiring.Component):
                               bits + 1, f"{name}_bound")
             result[path] = (self._aligned(used[path], 4, offset, f"{name}_m"),
                             self._aligned(bound, 5, offset, f"{name}_bound"))
-        return result, write
+        return result, memory
