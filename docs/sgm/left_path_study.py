@@ -117,20 +117,31 @@ def score(left, right, truth, disparities, config, variant):
     return round(evaluate(disparity, truth, disparities).correct, 3), spread
 
 
-def conditions(dataset):
-    pair = load_middlebury(dataset)
+def teddy_views(pair, dataset):
+    """(name, left, right, ground truth, D) of teddy and of its other view as the
+    reference (mirrored, ground truth disp6.pgm)."""
     left, right = pair.gray()
     yield "teddy", left, right, pair.ground_truth, 100
     truth = read_image(Path(dataset) / "disp6.pgm", "ground truth").astype(np.float64)
     yield ("teddy mirrored", np.ascontiguousarray(right[:, ::-1]),
            np.ascontiguousarray(left[:, ::-1]),
            np.ascontiguousarray(np.where(truth == 0, np.nan, truth / 4)[:, ::-1]), 100)
+
+
+def synthetic_conditions():
+    """The synthetic scenes (seeds 0-2) at each noise level, D = 48."""
     for noise, seed in itertools.product(NOISE, SEEDS):
         scene = synthetic_pair(256, 192, 48, seed=seed)
         sl, sr = scene.gray()
         if noise:
             sl, sr = gaussian_noise_pair(sl, sr, noise, seed=seed)
         yield f"synthetic noise {noise:g} s{seed}", sl, sr, scene.ground_truth, 48
+
+
+def conditions(dataset):
+    pair = load_middlebury(dataset)
+    yield from teddy_views(pair, dataset)
+    yield from synthetic_conditions()
 
 
 def report(rows):

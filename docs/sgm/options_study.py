@@ -46,20 +46,18 @@ import numpy as np
 
 from npstereo.gen.matching import Condition, condition_images
 from npstereo.golden import sgm
-from npstereo.golden.data import load_middlebury, read_image
+from npstereo.golden.data import load_middlebury
 from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.lr_check import INVALID
 from npstereo.golden.quality import evaluate
-from npstereo.golden.synthetic import synthetic_pair
 from npstereo.params import SGM_PATHS, StereoParams
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
-from left_path_study import study_main  # noqa: E402  (the studies' shared command line)
+from left_path_study import (study_main, synthetic_conditions,  # noqa: E402
+                             teddy_views)  # (the studies' shared command line and scenes)
 from bench_quality import LR_THRESHOLD, opencv_maps, opencv_matchers  # noqa: E402
 
-NOISE = (0.0, 2e-4, 2e-3)
-SEEDS = (0, 1, 2)
 #: Measurement groups, one JSON update each: the peers, each matching cost, the census
 #: cost's grid widened (smaller P1, t = 3 and a constant P2) once the median had changed the
 #: best penalties, and census on prefiltered images (added after teddy with noise).
@@ -79,22 +77,13 @@ BASE = dict(cost="census", p1=24, p2=79, adapt=5, paths=4, uniq=0, median="none"
 def conditions(dataset):
     """(name, left, right, ground truth, D) of every scene."""
     pair = load_middlebury(dataset)
+    yield from teddy_views(pair, dataset)
     left, right = pair.gray()
-    yield "teddy", left, right, pair.ground_truth, 100
-    truth = read_image(Path(dataset) / "disp6.pgm", "ground truth").astype(np.float64)
-    yield ("teddy mirrored", np.ascontiguousarray(right[:, ::-1]),
-           np.ascontiguousarray(left[:, ::-1]),
-           np.ascontiguousarray(np.where(truth == 0, np.nan, truth / 4)[:, ::-1]), 100)
     bayer_left, bayer_right = condition_images(pair, Condition(bayer=True))
     yield "teddy bayer", bayer_left, bayer_right, pair.ground_truth, 100
     noisy_left, noisy_right = gaussian_noise_pair(left, right, 2e-3, seed=0)
     yield "teddy noise 0.002", noisy_left, noisy_right, pair.ground_truth, 100
-    for noise, seed in itertools.product(NOISE, SEEDS):
-        scene = synthetic_pair(256, 192, 48, seed=seed)
-        sl, sr = scene.gray()
-        if noise:
-            sl, sr = gaussian_noise_pair(sl, sr, noise, seed=seed)
-        yield f"synthetic noise {noise:g} s{seed}", sl, sr, scene.ground_truth, 48
+    yield from synthetic_conditions()
 
 
 def _shifted(image, d):

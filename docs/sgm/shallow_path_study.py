@@ -25,7 +25,7 @@ from npstereo.golden.quality import evaluate
 from npstereo.params import SGM_ROW_PATHS, StereoParams
 
 sys.path.insert(0, str(Path(__file__).parent))
-from left_path_study import (CONFIGS, conditions, config_label,  # noqa: E402
+from left_path_study import (conditions, config_label,  # noqa: E402
                              study_main)
 
 #: Columns back in the row above of each shallow path measured.
