@@ -196,7 +196,12 @@ def left_path(owner, m, fresh, p2):
     if early_read:
         word = register(m, store.read(slots.round(loop - 1)), units * bits, "sgm_left_word")
     else:
-        word = store.read(slots.round(loop))
+        # The store's own copy of the round counter: the shared one through the LUT RAM's
+        # read, + P1 and the comparisons was census 5x5 SGM's critical path at 1280 x 720,
+        # D = 64, R = 4 (9.92 ns). Round(loop) is round(loop - 1) a clock later.
+        address = slots.round(loop) if rounds == 1 else \
+            replica(m, slots.round(loop - 1), "sgm_left_read_round", reset_less=True)
+        word = store.read(address)
     centre = [word[i * bits:(i + 1) * bits] for i in range(units)]
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
