@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 import pytest
-from amaranth.hdl import Fragment, Module, ResetInserter, Signal, UnusedElaboratable
+from amaranth.hdl import Fragment, Module, ResetInserter, Signal, UnusedElaboratable, Value
 from amaranth.lib import memory
 from amaranth.sim import Simulator
 
@@ -198,6 +198,21 @@ def record_memories(monkeypatch):
 
     monkeypatch.setattr(memory.Memory, "__init__", recording)
     return made
+
+
+def random_contents(made, rng, member, mark):
+    """A ``before_start`` hook that fills every memory in ``made`` with random words, then
+    calls ``mark(ctx, word)`` on the words of memories whose shape has ``member`` (to make
+    stale words look as harmful as they can)."""
+    def fill(ctx):
+        for store in made:
+            for row in range(store.depth):
+                word = store.data[row]
+                bits = len(Value.cast(word))
+                ctx.set(Value.cast(word), int(rng.integers(0, 1 << min(bits, 62))))
+                if member in getattr(store.shape, "members", {}):
+                    mark(ctx, word)
+    return fill
 
 
 def choose_bank_early(monkeypatch, suffix="_bank", clocks=None):

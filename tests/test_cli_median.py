@@ -11,15 +11,7 @@ from npstereo.golden.pipeline import disparity_map
 from npstereo.golden.quality import evaluate
 from npstereo.params import ParameterError, StereoParams
 
-D = 16
-
-
-def run_match(tmp_path, pair_files, name, *options):
-    left, right, _ = pair_files
-    raw = tmp_path / f"{name}.npy"
-    assert main(["match", str(left), str(right), "--disparities", str(D),
-                 "--out", str(tmp_path / f"{name}.png"), "--raw", str(raw), *options]) == 0
-    return np.load(raw)
+from test_cli_sgm import D, run_match
 
 
 @pytest.mark.parametrize("options", [(), ("--aggregation", "sgm", "--block", "5")])

@@ -12,7 +12,6 @@ import dataclasses
 
 import numpy as np
 import pytest
-from amaranth.hdl import Value
 
 from npstereo.hdl import core as core_module
 from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan_structure, trees, \
@@ -20,7 +19,8 @@ from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan_structure
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
 
-from hdl_helpers import RESET, check_frames, frame_beats, record_memories, refused_quietly
+from hdl_helpers import RESET, check_frames, frame_beats, random_contents, record_memories, \
+    refused_quietly
 from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
@@ -200,17 +200,12 @@ def test_stale_memory_contents_never_reach_a_result(monkeypatch):
         params = StereoParams(transform="census", block=3, disparities=8, rounds=2,
                               lr_threshold=lr, width=20, height=6, line_buffer=line_buffer)
 
-        def fill(ctx):
-            for store in made:
-                for row in range(store.depth):
-                    word = store.data[row]
-                    bits = len(Value.cast(word))
-                    ctx.set(Value.cast(word), int(rng.integers(0, 1 << min(bits, 62))))
-                    if "tag" in getattr(store.shape, "members", {}):
-                        # Words that name a live, in-frame position: the most harmful
-                        # stale contents there can be.
-                        ctx.set(word.tag.live, 1)
-                        ctx.set(word.tag.y, int(rng.integers(0, 6)))
+        def live(ctx, word):
+            # Words that name a live, in-frame position: the most harmful stale contents
+            # there can be.
+            ctx.set(word.tag.live, 1)
+            ctx.set(word.tag.y, int(rng.integers(0, 6)))
+        fill = random_contents(made, rng, "tag", live)
 
         pair = stereo_pair("layers", 6, 20, 21)
         result = check_frames(params, [pair], frame_beats(*pair), before_start=fill)

@@ -192,8 +192,7 @@ def test_golden_median_rules():
 
 # The core with the median: every output pixel against golden/pipeline.py ----------------
 
-from amaranth.hdl import Value  # noqa: E402
-from hdl_helpers import check_frames, frame_beats, record_memories  # noqa: E402
+from hdl_helpers import check_frames, frame_beats, random_contents, record_memories  # noqa: E402
 
 from npstereo.hdl import plan_timing  # noqa: E402
 
@@ -240,14 +239,7 @@ def test_core_with_median_ignores_stale_memories(monkeypatch):
     made = record_memories(monkeypatch)
     rng = np.random.default_rng(3)
 
-    def fill(ctx):
-        for store in made:
-            for row in range(store.depth):
-                word = store.data[row]
-                bits = len(Value.cast(word))
-                ctx.set(Value.cast(word), int(rng.integers(0, 1 << min(bits, 62))))
-                if "word" in getattr(store.shape, "members", {}):
-                    ctx.set(word.word, 1)
+    fill = random_contents(made, rng, "word", lambda ctx, word: ctx.set(word.word, 1))
 
     params = core_params()
     pair = stereo_pair("layers", 7, 20, 21, 8)
