@@ -14,35 +14,53 @@ from types import SimpleNamespace
 from amaranth.hdl import Array, Cat, Shape, Signal, unsigned
 from amaranth.lib.memory import Memory
 
-from .common import pipe
+from .common import pipe, replica
 from .plan_structure import BANK_CHOICE
 
 __all__ = ["choose_bank", "banked_memory", "BLOCK_RAM_MODES", "slice_widths", "line_memory"]
 
 
+#: Bits of a chosen word that one copy of the bank's index selects: a DP16KD's widest
+#: word. One index register reaching every bit of a wide word was census 5x5 SGM's critical
+#: path at 1280 x 720, D = 64, R = 4 (the top path rows' 224-bit word: 11.0 ns, one LUT).
+CHOICE_SLICE = 36
+
+
+def _chosen(m, words, index, name):
+    """``Array(words)[index]``, each :data:`CHOICE_SLICE` bits of it selected by a copy of
+    ``index`` of its own (``index`` a clock later: the copies are its last register)."""
+    width = len(words[0])
+    parts = []
+    for k, low in enumerate(range(0, width, CHOICE_SLICE)):
+        copy = replica(m, index, f"{name}_s{k}", reset_less=True)
+        parts.append(Array(w[low:low + CHOICE_SLICE] for w in words)[copy])
+    return Cat(*parts)
+
+
 def choose_bank(m, words, bank, name):
     """The word of bank ``bank`` among the banks' output registers ``words``, two clocks
     after ``bank``: chosen among up to :data:`~.plan_structure.BANK_CHOICE` banks at a time,
-    each level but the last registered (its digit of the index a clock later each time)."""
+    each level but the last registered (its digit of the index a clock later each time,
+    its last register copied per :data:`CHOICE_SLICE` bits of the word)."""
     choice = BANK_CHOICE
     digit = choice.bit_length() - 1
 
     def digits(low, high, level):
-        """The index's digits ``low:high``, delayed to the choice of ``level``."""
-        return pipe(m, bank[low:high], 2 + level, f"{name}{level}" if level else name)
+        """The index's digits ``low:high``, a clock before the choice of ``level``."""
+        return pipe(m, bank[low:high], 1 + level, f"{name}{level}" if level else name)
 
     level = 0
     while len(words) > choice:
-        chosen = digits(digit * level, digit * (level + 1), level)
+        late = digits(digit * level, digit * (level + 1), level)
         groups = [words[g:g + choice] for g in range(0, len(words), choice)]
         words = []
         for g, group in enumerate(groups):
             word = Signal.like(group[0], name=f"{name}{level}_{g}")
-            m.d.sync += word.eq(Array(group)[chosen] if len(group) > 1 else group[0])
+            m.d.sync += word.eq(_chosen(m, group, late, f"{name}{level}_{g}_select")
+                                if len(group) > 1 else group[0])
             words.append(word)
         level += 1
-    chosen = digits(digit * level, len(bank), level)
-    return Array(words)[chosen]
+    return _chosen(m, words, digits(digit * level, len(bank), level), f"{name}_select")
 
 
 def banked_memory(m, name, shape, banks, read_address, write_address, write_data,

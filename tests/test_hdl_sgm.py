@@ -244,7 +244,7 @@ def test_path_rows_in_banks_match_golden(monkeypatch, shallowest, deepest, banks
 def test_broken_path_rows_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words from the bank of the next address."""
     monkeypatch.setattr(plan_structure, "ROW_BANK", 32)
-    choose_bank_early(monkeypatch, "_bank", clocks=1)
+    choose_bank_early(monkeypatch, "_bank", clocks=0)
     assert_stage_caught(monkeypatch)
 
 

@@ -620,7 +620,7 @@ def test_broken_aggregation_bank_choice_level_is_caught(monkeypatch):
 def test_broken_aggregation_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words come from the bank of the next address."""
     monkeypatch.setattr(plan_structure, "COST_BANK", 8)
-    choose_bank_early(monkeypatch, "_bank", clocks=1)
+    choose_bank_early(monkeypatch, "_bank", clocks=0)
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="costs"), seed=1)
