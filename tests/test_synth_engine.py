@@ -107,7 +107,16 @@ def test_timeout_kills_what_the_tool_started(tmp_path):
 
 def _log_script(log_name, lines, every, then_sleep):
     """A process writing ``lines`` to ``log_name`` as a nextpnr run logs them, ``every``
-    seconds apart, then sleeping without a word."""
+    seconds apart, then sleeping without a word. With ``every`` 0 the log appears whole
+    (renamed into place): a watcher polling a log written line by line could stop the
+    run at any line it happened to read, and under load did."""
+    if every == 0:
+        return [sys.executable, "-c",
+                "import os, time\n"
+                f"with open({log_name + '.part'!r}, 'w') as log:\n"
+                f"    log.write(''.join(line + '\\n' for line in {lines!r}))\n"
+                f"os.replace({log_name + '.part'!r}, {log_name!r})\n"
+                f"time.sleep({then_sleep})\n"]
     return [sys.executable, "-c",
             "import time\n"
             f"with open({log_name!r}, 'w') as log:\n"
