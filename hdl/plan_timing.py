@@ -10,7 +10,7 @@ elaborated hardware.
 
 from dataclasses import dataclass
 
-from ..params import SGM_PATH_COUNT, SGM_TRACK_AGE, SGM_TRACK_STEPS
+from ..params import SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .plan_structure import (bank_choice_levels, choice_levels, cost_plan, cost_rows,
                              horizontal_plan, masks_after_compare, row_banks, row_sum_plan,
                              transform_plan, vertical_plan)
@@ -251,7 +251,8 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     allow; the asserts below are the margins of docs/hardware.md ("Semi-global
     aggregation"), which hold for every D <= 256 and R dividing D. L = Lu - m(x - 1)
     leaves T + 2 clocks after Lu. The paths from above take :data:`SGM_ROW_CLOCKS`; the
-    paths' L are summed by a tree (registered as ``every`` says, and at its root).
+    three paths' L are summed by a tree (registered as ``every`` says, and at its root),
+    and that sum and the left path's L by another.
     """
     rounds, steps, age = params.rounds, SGM_TRACK_STEPS, SGM_TRACK_AGE
     tree = sgm_tree_clocks(params.per_round)
@@ -287,7 +288,10 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     assert lu + rounds + 1 <= steps * rounds + loop - 1
     left = lu + tree + 2
     rows = sgm_row_clocks(params)
-    summed = max(left, rows) + sum(register_plan(SGM_PATH_COUNT, every, 0, True))
+    # The three paths from above are summed first (then wait for the left path as one
+    # sum, not three L), then the left path's L is added.
+    above = rows + sum(register_plan(len(SGM_ROW_PATHS), every, 0, True))
+    summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, history,
                      sum_clocks, picks, left, rows, rows + tree + rounds, summed)
 
