@@ -17,7 +17,7 @@ from amaranth.lib.memory import Memory
 from .common import pipe, replica
 from .plan_structure import BANK_CHOICE
 
-__all__ = ["choose_bank", "banked_memory", "BLOCK_RAM_MODES", "slice_widths", "line_memory"]
+__all__ = ["choose_bank", "ADDRESS_SLICE_BITS", "banked_memory", "BLOCK_RAM_MODES", "slice_widths", "line_memory"]
 
 
 #: Bits of a chosen word that one copy of the bank's index selects: a DP16KD's widest
@@ -63,32 +63,53 @@ def choose_bank(m, words, bank, name):
     return _chosen(m, words, digits(digit * level, len(bank), level), f"{name}_select")
 
 
-def banked_memory(m, name, shape, banks, read_address, write_address, write_data,
+#: Bits of a bank's word whose block RAMs share one copy of each address: eight DP16KD
+#: at 2K x 9, two at 512 x 36. One read address register reaching all 75 block RAMs of
+#: the top path rows (three banks of 224 bits) was census 5x5 SGM's critical path at
+#: 1280 x 720, D = 64, R = 4 (11.65 ns of routing, no logic).
+ADDRESS_SLICE_BITS = 72
+
+
+def banked_memory(m, name, shape, banks, read_early, write_early, write_data,
                   write_enable):
     """A memory of ``sum(banks)`` words (bank b holds the words from b * banks[0] on),
-    read every clock at ``read_address`` and written at ``write_address`` when
-    ``write_enable`` (or at ``write_address[b]`` into bank b: copies of the address, each
-    driving one bank's block RAMs). Returns the word read, in a register: two clocks after the address
-    with one bank (the read, the block RAM's output register), and with several banks a
-    clock more per level of the bank's choice (:func:`choose_bank`). No collision logic
+    read every clock at the address ``read_early`` had a clock before and written when
+    ``write_enable`` at the address ``write_early`` had a clock before: each
+    :data:`ADDRESS_SLICE_BITS` bits of each bank are a memory of their own with copies of
+    both addresses of their own, so that no address register reaches more than a few
+    block RAMs. Returns the word read, in a register: two clocks after the address with
+    one bank (the read, the block RAM's output register), and with several banks a clock
+    more per level of the bank's choice (:func:`choose_bank`). No collision logic
     (``no_rw_check``): the callers never read a word in the clock it is written."""
-    low = (banks[0] - 1).bit_length() if len(banks) > 1 else len(read_address)
-    if not isinstance(write_address, (list, tuple)):
-        write_address = [write_address] * len(banks)
+    width = Shape.cast(shape).width
+    low = (banks[0] - 1).bit_length() if len(banks) > 1 else len(read_early)
+    slices = [(first, min(ADDRESS_SLICE_BITS, width - first))
+              for first in range(0, width, ADDRESS_SLICE_BITS)]
     words = []
     for b, depth in enumerate(banks):
-        memory = Memory(shape=shape, depth=depth, init=[], attrs={"no_rw_check": 1})
-        m.submodules[f"{name}_{b}" if len(banks) > 1 else name] = memory
-        read, write = memory.read_port(domain="sync"), memory.write_port()
-        mine = write_enable if len(banks) == 1 else \
-            write_enable & (write_address[b][low:] == b)
-        m.d.comb += [read.addr.eq(read_address[:low]), write.addr.eq(write_address[b][:low]),
-                     write.data.eq(write_data), write.en.eq(mine)]
-        words.append(pipe(m, read.data, 1, f"{name}_{b}_out"))
+        parts = []
+        for k, (first, bits) in enumerate(slices):
+            part = f"{name}_{b}" if len(banks) > 1 else name
+            part += f"_{k}" if len(slices) > 1 else ""
+            memory = Memory(shape=unsigned(bits), depth=depth, init=[],
+                            attrs={"no_rw_check": 1})
+            m.submodules[part] = memory
+            read, write = memory.read_port(domain="sync"), memory.write_port()
+            read_address = replica(m, read_early[:low], f"{part}_read_address",
+                                   reset_less=True)
+            write_address = replica(m, write_early, f"{part}_write_address",
+                                    reset_less=True)
+            mine = write_enable if len(banks) == 1 else \
+                write_enable & (write_address[low:] == b)
+            m.d.comb += [read.addr.eq(read_address), write.addr.eq(write_address[:low]),
+                         write.data.eq(write_data[first:first + bits]), write.en.eq(mine)]
+            parts.append(read.data)
+        words.append(pipe(m, Cat(*parts), 1, f"{name}_{b}_out"))
     if len(banks) == 1:
         return words[0]
+    bank = pipe(m, read_early[low:], 1, f"{name}_read_bank")
     word = Signal(shape, name=f"{name}_word", reset_less=True)
-    m.d.sync += word.eq(choose_bank(m, words, read_address[low:], f"{name}_bank"))
+    m.d.sync += word.eq(choose_bank(m, words, bank, f"{name}_bank"))
     return word
 
 

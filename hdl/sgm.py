@@ -41,7 +41,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .banks import banked_memory, line_memory
-from .common import SlotClock, Store, absolute_difference, bits_for, register, replica, \
+from .common import SlotClock, Store, absolute_difference, bits_for, register, \
     tag_layout, taps
 from .plan_structure import row_banks
 from .plan_timing import SGM_ROW_CLOCKS, sgm_timing
@@ -287,8 +287,9 @@ class SemiGlobalAggregation(wiring.Component):
         # L back into the rows' memories at the position's own column, at t.rows.
         # A counter of its own, loaded with the base in round 0 (the base + the shared round
         # counter was census 7x7 SGM's critical path at R = 10: that counter's 7.7 ns of
-        # routing into the adder), a clock ahead, then one replica per bank: the counter
-        # driving all 61 block RAMs' write addresses was the next (9.77 ns).
+        # routing into the adder), a clock ahead, then copied for each few block RAMs
+        # (banked_memory): the counter driving all 61 block RAMs' write addresses was the
+        # next (9.77 ns).
         write_count = Signal(range(depth), name="sgm_rows_write_count", reset_less=True)
         m.d.sync += write_count.eq(Mux(
             slots.first(t.rows - 2),
@@ -297,11 +298,10 @@ class SemiGlobalAggregation(wiring.Component):
                    "top_right": Signal(word_bits, name="sgm_rows_top_right_written")}
         words = []
         for name, base in (("top", own), ("top_right", nxt)):
-            address = register(m, base + slots.round(2), range(depth), f"sgm_{name}_address")
-            write_addresses = [replica(m, write_count, f"sgm_{name}_write_address{b}",
-                                       reset_less=True) for b in range(len(banks))]
+            address = Signal(range(depth), name=f"sgm_{name}_address_early")
+            m.d.comb += address.eq(base + slots.round(2))
             words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
-                                       banks, address, write_addresses, written[name],
+                                       banks, address, write_count, written[name],
                                        self._valid_at(t.rows)))
         (top, top_left), top_right = _lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.

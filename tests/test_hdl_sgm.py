@@ -22,7 +22,8 @@ from amaranth.hdl import Value
 from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
-from npstereo.hdl import calculation_stage, plan, plan_memories, plan_structure, plan_timing
+from npstereo.hdl import banks, calculation_stage, plan, plan_memories, plan_structure, \
+    plan_timing
 from npstereo.hdl import sgm as hdl_sgm
 from npstereo.hdl import sgm_left
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
@@ -239,6 +240,33 @@ def test_path_rows_in_banks_match_golden(monkeypatch, shallowest, deepest, banks
     assert plan_structure.choice_levels(banks) == levels
     assert plan_timing.sgm_row_clocks(BROKEN) == plan_timing.SGM_ROW_CLOCKS + levels
     check_stage(BROKEN, monkeypatch, seed=banks)
+
+
+def _address_slices(monkeypatch):
+    """Path rows in 10 banks of 8 words, each bank's word (14 and 7 bits) in slices of 5
+    bits with copies of the addresses of their own."""
+    monkeypatch.setattr(banks, "ADDRESS_SLICE_BITS", 5)
+    monkeypatch.setattr(plan_structure, "ROW_BANK", 8)
+    monkeypatch.setattr(plan_structure, "ROW_BANK_DEEPEST", 8)
+
+
+def test_path_rows_in_address_slices_match_golden(monkeypatch):
+    _address_slices(monkeypatch)
+    check_stage(BROKEN, monkeypatch, seed=5)
+
+
+def test_broken_address_slice_is_caught(monkeypatch):
+    """The read address of every bank's second slice a clock late."""
+    _address_slices(monkeypatch)
+    real = banks.replica
+
+    def late(m, value, name, shape=None, enable=None, reset_less=False):
+        copy = real(m, value, name, shape, enable, reset_less)
+        if name.endswith("_1_read_address"):
+            copy = real(m, copy, f"{name}_late", shape, enable, reset_less)
+        return copy
+    monkeypatch.setattr(banks, "replica", late)
+    assert_stage_caught(monkeypatch)
 
 
 def test_broken_path_rows_bank_choice_is_caught(monkeypatch):
