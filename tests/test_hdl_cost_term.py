@@ -193,3 +193,24 @@ def test_broken_clip_is_caught(monkeypatch):
     """Absolute differences clipped at 63 instead of 31."""
     monkeypatch.setattr(cost_term, "AD3_CLIP", 63)
     assert_caught()
+
+
+# The generated Verilog under cocotb (Icarus) ----------------------------------------------
+
+def test_icarus_stream_with_the_term():
+    """test_cocotb's full plan (frames back to back under idle cycles and backpressure, a
+    reset, misframed lines, an aborted frame) with the term on, R = 1: every good frame
+    bit-exact; the same core with the history's gates always on is reported mismatching."""
+    from npstereo.hdl.verilog import core_verilog
+    from npstereo.sim import cosim
+    from test_cocotb import FULL_PLAN, assert_bit_exact, config, frames
+
+    params = config("census", 3, 8, 1, 1).replace(aggregation="sgm", cost_term="ad3", p1=3,
+                                                  p2=20, p2_adapt=2)
+    pairs = frames(params)
+    assert_bit_exact(cosim.run_stream("icarus", params, pairs, FULL_PLAN))
+    with pytest.MonkeyPatch.context() as patch:
+        broken_term(patch, older=True, oldest=True)
+        broken = core_verilog(params)
+    result = cosim.run_stream("icarus", params, pairs, FULL_PLAN[:1], core_text=broken)
+    assert result.frames and not result.ok
