@@ -30,7 +30,8 @@ from amaranth.hdl import Cat, Mux, Signal, unsigned
 from ..params.cost_terms import AD3_CLIP, AD3_LIMIT, AD3_SHIFT
 from .common import Store, absolute_difference, pipe
 
-__all__ = ["COST_TERM_CLOCKS", "COLUMN_BITS", "term_clocks", "right_column", "Ad3Term"]
+__all__ = ["COST_TERM_CLOCKS", "COLUMN_BITS", "term_clocks", "term_word_bits",
+           "term_memories", "right_column", "Ad3Term"]
 
 #: Clocks from a unit's operands to its term (module docstring).
 COST_TERM_CLOCKS = 6
@@ -42,6 +43,20 @@ _SUM_BITS = (3 * AD3_CLIP).bit_length()
 def term_clocks(params):
     """Clocks from the operands to the cost term: 0 without one."""
     return COST_TERM_CLOCKS if params.cost_term else 0
+
+
+def term_word_bits(params):
+    """Bits the term adds to each right-store word (and left word): 0 without one."""
+    return COLUMN_BITS if params.cost_term else 0
+
+
+def term_memories(params):
+    """The term's LUT RAM (R > 1; registers at R = 1) as (name, count, depth, width): each
+    unit's history of two column sums per round (the stores' wider words are counted with
+    the stores)."""
+    if not params.cost_term or params.rounds == 1:
+        return []
+    return [("cost term histories", params.per_round, params.rounds, 2 * _SUM_BITS)]
 
 
 def right_column(window, block):

@@ -99,7 +99,6 @@ COSTS = [
     (3, 4, 1, 20, 5),       # R = 1, four lanes, skews 0 .. 3
     (3, 16, 1, 28, 5),      # R = 1, sixteen lanes with equal skews
     (5, 6, 2, 24, 5),       # R = 2: the history in LUT RAM
-    (3, 6, 3, 20, 5),       # R = 3
     (3, 8, 8, 18, 5),       # R = D: one lane, x - d >= 2 from its own flag
 ]
 
@@ -214,3 +213,25 @@ def test_icarus_stream_with_the_term():
         broken = core_verilog(params)
     result = cosim.run_stream("icarus", params, pairs, FULL_PLAN[:1], core_text=broken)
     assert result.frames and not result.ok
+
+
+# What the report counts -------------------------------------------------------------------
+
+def test_memory_formula_counts_the_term(monkeypatch):
+    """The right stores' wider words and the histories' LUT RAM (R = 2) in the memory
+    formula that ``npstereo report`` compares with Yosys: it holds the bits of the memories
+    the elaborated core makes (Yosys found the same 4212 bits, docs/sgm.md), and a formula
+    without the term's store bits does not."""
+    from npstereo.hdl import plan_memories
+    from npstereo.hdl.verilog import core_verilog
+
+    params = term_params(3, 6, 2, 20, 4)
+    made = record_memories(monkeypatch)
+    core_verilog(params)
+    elaborated = sum(Shape.cast(memory.shape).width * memory.depth for memory in made)
+    assert elaborated == plan_memories.memory_bits(params) == 4212
+    kinds = {memory.name: memory for memory in plan_memories.memories(params)}
+    assert kinds["cost term histories"].bits == 3 * 2 * 2 * 7
+    assert kinds["right-transform stores"].width == params.transform_bits + 24
+    monkeypatch.setattr(plan_memories, "term_word_bits", lambda p: 0)
+    assert plan_memories.memory_bits(params) != elaborated
