@@ -374,7 +374,8 @@ class CalculationStage(wiring.Component):
         ``early`` a clock before; unit i works s_i clocks later, and its masks are delayed
         with it. The box aggregation takes the units' costs skewed; for SGM unit i's
         result waits S - s_i clocks, so that all units' results leave together. A cost is 0 (Cmax for SGM) where x - d < 0, where its row lies outside the
-        frame, and in slots without a position.
+        frame, and in slots without a position; elsewhere the cost term, if any, is added
+        (:meth:`_term`).
         """
         p = self.params
         start = self.stored + 1
@@ -398,7 +399,9 @@ class CalculationStage(wiring.Component):
             m.d.sync += beyond.eq(x_minus_round >= units + 1)
 
         def at_least(i, n):
-            """x - d >= n for unit i's d (0 <= n <= 2), a clock after the flags."""
+            """x - d >= n for unit i's d (0 <= n <= 2), a clock after the flags. Unit 0's
+            x - d >= 0 is x - j*D/R >= 0 alone (a constant comparison fails Verilator's
+            lint)."""
             flag = Signal(name=f"x_minus_d{i}_at_least{n}")
             if i + n < units:
                 m.d.sync += flag.eq(all_pairs | (some_pairs & (low >= i + n)) if i + n else
@@ -425,7 +428,6 @@ class CalculationStage(wiring.Component):
         masked = []
         for i, units_of_row in enumerate(self.cost_units):
             skew = skews[i]
-            # Unit 0 needs only x - j*D/R >= 0 (a constant comparison fails Verilator's lint).
             in_row = pipe(m, at_least(i, 0), self.costed - start - 2 + skew, f"in_row{i}")
             term = self._term(m, slots, i, left_words[i], right_words[i], tag, at_least)
             row_costs = []
@@ -452,7 +454,6 @@ class CalculationStage(wiring.Component):
             masked.append(total)
         return masked
 
-
     def _term(self, m, slots, i, left_word, right_word, tag, at_least):
         """Unit i's cost term (:class:`~.cost_term.Ad3Term`) at ``self.costed + s_i``, or
         None without one. ``tag`` is slot-aligned at unit 0's operands, ``at_least`` makes
@@ -463,8 +464,9 @@ class CalculationStage(wiring.Component):
         start, skew, bits = self.stored + 1, self.skews[i], p.transform_bits
         at = start + skew
         # The flags and the history's write enable at ``at + 3``: the flags are made at
-        # start + 2, the enable a replica a clock after the slot's valid bit (the valid
-        # bit reaching every unit's history was one long net, as the stores' enables).
+        # start + 2, the enable is a replica of its own a clock after the slot's valid bit,
+        # as the stores' enables are (one valid bit for all units was census 5x5's
+        # critical path at 720p there).
         older = pipe(m, at_least(i, 1), 1 + skew, f"term{i}_older")
         oldest = pipe(m, at_least(i, 2), 1 + skew, f"term{i}_oldest")
         write = replica(m, slots.delay(tag.valid, start, skew + 2, f"term{i}_valid"),
