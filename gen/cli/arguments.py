@@ -109,7 +109,8 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
     sgm.add_argument("--p2", type=int, metavar="N",
                      help="penalty of a larger step, P1 <= P2 <= 2^(bitlen(Cmax) + 2) - 1 - "
                           "Cmax for the transform's largest cost Cmax (census 7x7: "
-                          f"{max_path_penalty(census7.max_cost)}) (default {SGM_DEFAULT_P2})")
+                          f"{max_path_penalty(census7.max_cost)}) (default {SGM_DEFAULT_P2}, "
+                          f"{default_p2('ad3')} with --cost-term ad3)")
     adapt = sgm.add_mutually_exclusive_group()
     adapt.add_argument("--p2-adapt", type=int, metavar="T",
                        help=f"adaptive P2: halved for every doubling of the intensity step "
