@@ -26,6 +26,7 @@ import numpy as np
 from ..params import (SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS,
                       SGM_TRACK_AGE, SGM_TRACK_STEPS, ParameterError, StereoParams,
                       check_penalties, check_sgm_paths)
+from .cost_term import add_cost_term
 from .data import check_gray_pair
 from .lr_check import INVALID, DisparityResult, lr_check
 from .matching_cost import cost_dtype, matching_costs, pixel_sums
@@ -65,9 +66,10 @@ def cost_volume(left, right, params, dtype=None, threads=None):
     """Matching costs C(x, y, d) of two gray images for SGM: (H, W, D).
 
     The transform and matching cost are the box pipeline's (golden/transform.py,
-    golden/matching_cost.py, unchanged). One rule differs: where x - d < 0 the pair does
-    not exist and C = Cmax (the box pipeline uses 0), so that a path crossing the left
-    border is not drawn towards disparities that have no partner pixel.
+    golden/matching_cost.py, unchanged), plus ``params.cost_term`` if any
+    (:mod:`.cost_term`). One rule differs: where x - d < 0 the pair does not exist and
+    C = Cmax (the box pipeline uses 0), so that a path crossing the left border is not
+    drawn towards disparities that have no partner pixel.
 
     Parameters
     ----------
@@ -82,7 +84,8 @@ def cost_volume(left, right, params, dtype=None, threads=None):
     left_t, right_t = _transforms(left, right, params, threads)
     if dtype is None:
         dtype = np.uint16 if params.max_cost <= np.iinfo(np.uint16).max else np.uint32
-    return _costs_disparity_last(left_t, right_t, params, dtype)
+    return add_cost_term(_costs_disparity_last(left_t, right_t, params, dtype), left, right,
+                         params)
 
 
 def _transforms(left, right, params, threads):
@@ -397,8 +400,9 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
     with ThreadPoolExecutor(max_workers=workers) as pool:
         for y0 in range(0, height, rows):
             y1 = min(height, y0 + rows)
-            costs = _costs_disparity_last(left_t[..., y0:y1, :], right_t[..., y0:y1, :],
-                                          params, dtype)
+            costs = add_cost_term(_costs_disparity_last(left_t[..., y0:y1, :],
+                                                        right_t[..., y0:y1, :], params, dtype),
+                                  left, right, params, (y0, y1))
 
             def one_path(path):
                 out = np.empty_like(costs)

@@ -32,6 +32,7 @@ from amaranth.lib.wiring import In, Out
 from .aggregation import Aggregation
 from .banks import line_memory
 from .common import SlotClock, Store, bits_for, pipe, replica, round_base, tag_layout
+from .cost_term import COLUMN_BITS, COST_TERM_CLOCKS, Ad3Term, right_column
 from .matching_cost import MatchingCost
 from .plan_structure import (centre_copies, cost_rows, masks_after_compare, row_sum_plan,
                              store_slices, transformed_rows, vertical_bits, window_first_row,
@@ -148,6 +149,12 @@ class CalculationStage(wiring.Component):
         if self.transforms_above:
             self._windows_above(m, tl, tr)
         left, right = self._transformed_rows(m, slots, tl.value, tr.value)
+        if p.cost_term:
+            # The cost term's pixel columns travel with the transforms (.cost_term).
+            left.append(pipe(m, right_column(self.window_left, p.block), self.transformed,
+                             "term_left_column"))
+            right.append(pipe(m, right_column(self.window_right, p.block), self.transformed,
+                              "term_right_column"))
         tag = slots.delay(self.tag, 0, self.transformed, "transformed_tag")
         before = slots.delay(self.tag, 0, self.transformed - 1, "transformed_tag_ahead")
         right_words = self._right_stores(m, slots, Cat(*right), tag, before)
@@ -367,7 +374,8 @@ class CalculationStage(wiring.Component):
         ``early`` a clock before; unit i works s_i clocks later, and its masks are delayed
         with it. The box aggregation takes the units' costs skewed; for SGM unit i's
         result waits S - s_i clocks, so that all units' results leave together. A cost is 0 (Cmax for SGM) where x - d < 0, where its row lies outside the
-        frame, and in slots without a position.
+        frame, and in slots without a position; elsewhere the cost term, if any, is added
+        (:meth:`_term`).
         """
         p = self.params
         start = self.stored + 1
@@ -385,6 +393,22 @@ class CalculationStage(wiring.Component):
         if units > 1:
             low = Signal(range(units), name="x_minus_round_low")
             m.d.sync += low.eq(x_minus_round[:len(low)])
+        if p.cost_term:
+            # The cost term's x - d >= 2 of the last unit.
+            beyond = Signal(name="all_pairs_beyond")
+            m.d.sync += beyond.eq(x_minus_round >= units + 1)
+
+        def at_least(i, n):
+            """x - d >= n for unit i's d (0 <= n <= 2), a clock after the flags. Unit 0's
+            x - d >= 0 is x - j*D/R >= 0 alone (a constant comparison fails Verilator's
+            lint)."""
+            flag = Signal(name=f"x_minus_d{i}_at_least{n}")
+            if i + n < units:
+                m.d.sync += flag.eq(all_pairs | (some_pairs & (low >= i + n)) if i + n else
+                                    some_pairs)
+            else:
+                m.d.sync += flag.eq(all_pairs if i + n == units else beyond)
+            return flag
         rows_ok = []
         for k in range(self.rows):
             ok = Signal(name=f"cost_row_ok{k}")
@@ -404,10 +428,8 @@ class CalculationStage(wiring.Component):
         masked = []
         for i, units_of_row in enumerate(self.cost_units):
             skew = skews[i]
-            in_row = Signal(name=f"in_row{i}")
-            # Unit 0 needs only x - j*D/R >= 0 (a constant comparison fails Verilator's lint).
-            m.d.sync += in_row.eq(all_pairs | (some_pairs & (low >= i)) if i else some_pairs)
-            in_row = pipe(m, in_row, self.costed - start - 2 + skew, f"in_row{i}")
+            in_row = pipe(m, at_least(i, 0), self.costed - start - 2 + skew, f"in_row{i}")
+            term = self._term(m, slots, i, left_words[i], right_words[i], tag, at_least)
             row_costs = []
             for k, unit in enumerate(units_of_row):
                 m.submodules[f"cost{i}_row{k}"] = unit
@@ -415,6 +437,8 @@ class CalculationStage(wiring.Component):
                              unit.right.eq(right_words[i][k * bits:(k + 1) * bits]),
                              unit.en.eq(1)]
                 cost = pipe(m, unit.cost, self.costed - start - unit.latency, f"cost{i}_{k}")
+                if term is not None:
+                    cost = (cost + term)[:p.cost_bits]
                 row_costs.append(Mux(in_row & rows_ok[k][skew], cost, outside))
             if self.rows > 1:
                 # The masks are a level of logic in front of the adders (rank 7x7 on ECP5:
@@ -429,6 +453,27 @@ class CalculationStage(wiring.Component):
                 total = pipe(m, total, last - skew, f"aligned_cost{i}")
             masked.append(total)
         return masked
+
+    def _term(self, m, slots, i, left_word, right_word, tag, at_least):
+        """Unit i's cost term (:class:`~.cost_term.Ad3Term`) at ``self.costed + s_i``, or
+        None without one. ``tag`` is slot-aligned at unit 0's operands, ``at_least`` makes
+        the flags x - d >= n a clock after them (as the pairs' mask)."""
+        p = self.params
+        if not p.cost_term:
+            return None
+        start, skew, bits = self.stored + 1, self.skews[i], p.transform_bits
+        at = start + skew
+        # The flags and the history's write enable at ``at + 3``: the flags are made at
+        # start + 2, the enable is a replica of its own a clock after the slot's valid bit,
+        # as the stores' enables are (one valid bit for all units was census 5x5's
+        # critical path at 720p there).
+        older = pipe(m, at_least(i, 1), 1 + skew, f"term{i}_older")
+        oldest = pipe(m, at_least(i, 2), 1 + skew, f"term{i}_oldest")
+        write = replica(m, slots.delay(tag.valid, start, skew + 2, f"term{i}_valid"),
+                        f"term{i}_write")
+        term = Ad3Term(m, slots, p, i, left_word[bits:bits + COLUMN_BITS],
+                       right_word[bits:bits + COLUMN_BITS], at, older, oldest, write)
+        return pipe(m, term.value, self.costed - start - COST_TERM_CLOCKS, f"term{i}")
 
 
 class _Aligned:

@@ -7,6 +7,7 @@ compares their bits with what Yosys infers (``tests/test_report.py``).
 from dataclasses import dataclass
 
 from .common import tag_layout
+from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, store_slices,
                              vertical_bits, window_rows)
 from .plan_timing import core_timing, lr_timing
@@ -47,12 +48,13 @@ def memories(params, every=DEFAULT_EVERY):
     if p.is_sgm:
         result += sgm_memories(p)
     if rounds > 1:
-        widths = store_slices(rows * p.transform_bits)
+        widths = store_slices(rows * p.transform_bits + term_word_bits(p))
         for width in sorted(set(widths)):
             result.append(MemoryUse("right-transform stores", units * widths.count(width),
                                     rounds, width))
         if a:
             result.append(MemoryUse("row taps", units, rounds, 2 * a * vertical_bits(p)))
+        result += [MemoryUse(*memory) for memory in term_memories(p)]
     if p.lr_check:
         d_bits = max(1, (p.disparities - 1).bit_length())
         timing = core_timing(p, every)

@@ -14,6 +14,7 @@ from ..params import SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .plan_structure import (bank_choice_levels, choice_levels, cost_plan, cost_rows,
                              horizontal_plan, masks_after_compare, row_banks, row_sum_plan,
                              transform_plan, vertical_plan)
+from .cost_term import term_clocks
 from .median import MEDIAN_LATENCY
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
@@ -125,7 +126,8 @@ def calculation_timing(params, every=DEFAULT_EVERY):
     unit leave free, and unit 0 reads it R - S clocks later (S: the last unit's skew), so
     with R >= 2 the stores are read R - S clocks after the transforms. Unit 0's read
     register precedes its cost unit; the cost masks take two registers (x - j*D/R, then one
-    comparison per unit), so at least 3 clocks pass from the stores to the masked costs.
+    comparison per unit), so at least 3 clocks pass from the stores to the masked costs, and
+    with a cost term at least its clocks (:mod:`.cost_term`).
     With A rows the row costs are summed (registered); a single row's cost is registered
     once; then unit i's result waits S - s_i clocks for the last unit's: before SGM, or
     after the box sum (:class:`~.aggregation.Aggregation`).
@@ -137,7 +139,8 @@ def calculation_timing(params, every=DEFAULT_EVERY):
                       else 1)
     skew = unit_skews(params)[-1]
     stored = transformed + (params.rounds - skew if params.rounds > 1 else 0)
-    costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3)
+    costed = max(stored + 1 + sum(cost_plan(params, every)), stored + 3,
+                 stored + 1 + term_clocks(params))
     vertical = costed + (sum(row_sum_plan(params, every)) if rows > 1 else 1)
     # SGM takes the units' results re-aligned; the box sum takes them skewed and
     # re-aligns its own.

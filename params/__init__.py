@@ -15,6 +15,7 @@ penalties and defaults in :mod:`.sgm`; everything is importable from here.
 
 from dataclasses import dataclass, fields, replace
 
+from .cost_terms import (AD3_DEFAULT_P2, COST_TERMS, check_cost_term, term_max)
 from .errors import ParameterError, UserError, is_int, is_integral
 from .sgm import (P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2,
                   SGM_MAX_ADAPT, SGM_PATH_COUNT, SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED,
@@ -31,7 +32,8 @@ __all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
            "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
            "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
            "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
-           "sgm_summed_cost_bits", "MEDIAN_FILL", "MAX_SUBPIXEL_BITS"]
+           "sgm_summed_cost_bits", "MEDIAN_FILL", "MAX_SUBPIXEL_BITS", "COST_TERMS",
+           "default_p2"]
 
 #: What the hardware keeps of the rows above for the vertical aggregation: the matching
 #: costs of the A-1 rows (D costs per column), or the transformed pixels of both images
@@ -98,6 +100,10 @@ class StereoParams:
         F, 0 .. :data:`MAX_SUBPIXEL_BITS`: fractional bits of the output disparity (a
         parabola through the winner's summed costs and its neighbours', docs/semantics.md
         "Sub-pixel disparity"); 0 is the whole levels of the plain WTA.
+    cost_term : str or None
+        A term of :data:`COST_TERMS` added to the matching cost (census with SGM only;
+        docs/semantics.md "The ad3 cost term"); it raises Cmax and, when P2 is not given,
+        makes the default P2 :func:`default_p2`'s. ``None`` (default): the transform's cost.
     """
 
     transform: str = "census"
@@ -115,11 +121,14 @@ class StereoParams:
     p2_adapt: int | None = None
     median: bool = False
     subpixel_bits: int = 0
+    cost_term: str | None = None
 
     def __repr__(self):
-        # The dataclass's form, without subpixel_bits while it is 0: repr() is the report
-        # cache's key, and every configuration without the fraction keeps its key.
-        shown = [f for f in fields(self) if f.name != "subpixel_bits" or self.subpixel_bits]
+        # The dataclass's form, without subpixel_bits while it is 0 and cost_term while it
+        # is None: repr() is the report cache's key, and every configuration without them
+        # keeps its key.
+        shown = [f for f in fields(self) if getattr(self, f.name) or f.name not in
+                 ("subpixel_bits", "cost_term")]
         return (f"{type(self).__qualname__}("
                 + ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown) + ")")
 
@@ -137,6 +146,8 @@ class StereoParams:
         if self.disparities % self.rounds != 0:
             raise ParameterError(
                 f"rounds must divide disparities ({self.disparities}), not {self.rounds!r}")
+        check_cost_term(self.cost_term, self.transform, self.aggregation == SGM,
+                        self.aggregation)
         if self.aggregation == SGM:
             self._resolve_penalties()
         else:
@@ -178,7 +189,7 @@ class StereoParams:
     def _resolve_penalties(self):
         """Validate the SGM penalties and store the defaults in place of ``None``."""
         p1 = SGM_DEFAULT_P1 if self.p1 is None else self.p1
-        p2 = SGM_DEFAULT_P2 if self.p2 is None else self.p2
+        p2 = default_p2(self.cost_term) if self.p2 is None else self.p2
         adapt = SGM_DEFAULT_ADAPT if self.p2_adapt is None else self.p2_adapt
         try:
             check_penalties(self.max_cost, p1, p2)
@@ -188,7 +199,7 @@ class StereoParams:
             p1_fine = is_integral(p1) and p1 >= 0
             if p1_fine and (self.p1 is None or self.p2 is None):
                 raise ParameterError(f"{error} (SGM defaults P1 = {SGM_DEFAULT_P1}, "
-                                     f"P2 = {SGM_DEFAULT_P2})") from None
+                                     f"P2 = {default_p2(self.cost_term)})") from None
             raise
         off = is_integral(adapt) and adapt == P2_ADAPT_OFF
         check_penalties(self.max_cost, p1, p2, None if off else adapt)
@@ -272,8 +283,9 @@ class StereoParams:
 
     @property
     def max_cost(self):
-        """Largest matching cost of one pixel pair."""
-        return self.spec.max_cost(self.neighbours)
+        """Largest matching cost of one pixel pair: the transform's, plus the largest
+        value of the cost term if there is one (Cmax of docs/semantics.md)."""
+        return self.spec.max_cost(self.neighbours) + term_max(self.cost_term)
 
     @property
     def cost_bits(self):
@@ -327,7 +339,8 @@ class StereoParams:
         lut = "" if self.lut_inputs == 4 else f" LUT{self.lut_inputs}"
         median = " median" if self.median else ""
         fraction = f" F={self.subpixel_bits}" if self.subpixel_bits else ""
-        return (f"{self.transform} {self.block}x{self.block} D={self.disparities} "
+        term = f"+{self.cost_term}" if self.cost_term else ""
+        return (f"{self.transform}{term} {self.block}x{self.block} D={self.disparities} "
                 f"R={self.rounds} {self.describe_aggregation()} LR={lr}{median}{size}{buffer}"
                 f"{lut}{fraction}")
 
@@ -337,3 +350,10 @@ class StereoParams:
             return f"A={self.aggregation}"
         adapt = "off" if self.p2_adapt == P2_ADAPT_OFF else str(self.p2_adapt)
         return f"SGM P1={self.p1} P2={self.p2} t={adapt}"
+
+
+def default_p2(cost_term):
+    """SGM's default P2 for ``cost_term``: :data:`SGM_DEFAULT_P2`, or with ``ad3`` the
+    smaller one that keeps census 7x7's path cost at 7 bits (``cost_terms.AD3_DEFAULT_P2``);
+    the one place the term changes a default."""
+    return SGM_DEFAULT_P2 if cost_term is None else AD3_DEFAULT_P2

@@ -66,11 +66,12 @@ BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 #: median). The recommended ones first: the default (docs/sgm.md, "Choosing the defaults")
 #: and the best census 5x5 on clean real scenes; then the best census 5x5 with a constant
 #: P2; then the defaults with the 3x3 median (issue 28, docs/sgm.md "Quality options"), and
-#: with the median at the penalties its study chose (P1 = 16, t = 4).
+#: with the median at the penalties its study chose (P1 = 16, t = 4); then the median with
+#: the ad3 cost term at its default P2 (a seventh field: the cost term).
 SGM = [tuple(fields[name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
        + (False,) for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None, False)] + [
     tuple(SGM_RECOMMENDED[0][name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
-    + (True,), ("census", 7, 16, 79, 4, True)]
+    + (True,), ("census", 7, 16, 79, 4, True), ("census", 7, 24, 72, 5, True, "ad3")]
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).
@@ -210,10 +211,11 @@ def main(argv=None):
         unchecked[:, :params.first_valid_column] = INVALID
         add("npstereo box", f"npstereo {transform} {block}x{block}, {aggregation}x{aggregation}"
             f" box", (unchecked, result.disparity), time.perf_counter() - start)
-    for transform, block, p1, p2, adapt, median in SGM:
+    for transform, block, p1, p2, adapt, median, *term in SGM:
         start = time.perf_counter()
         params = StereoParams(transform=transform, block=block, disparities=disparities,
-                              lr_threshold=LR_THRESHOLD)
+                              lr_threshold=LR_THRESHOLD,
+                              **(dict(aggregation="sgm", cost_term=term[0]) if term else {}))
         result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
         unchecked = result.left.copy()
         unchecked[:, :disparities] = INVALID
@@ -222,7 +224,8 @@ def main(argv=None):
             maps = tuple(median3(disparity) for disparity in maps)
         p2_text = f"P2={p2}" + (f" adaptive t={adapt}" if adapt is not None else "")
         add("npstereo SGM", f"npstereo {transform} {block}x{block}, SGM 4 paths P1={p1} "
-            f"{p2_text}" + (", 3x3 median" if median else ""), maps,
+            f"{p2_text}" + (f", + {term[0]}" if term else "")
+            + (", 3x3 median" if median else ""), maps,
             time.perf_counter() - start)
     for name, matcher in opencv_matchers(cv2, num_disparities):
         start = time.perf_counter()

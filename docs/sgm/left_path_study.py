@@ -194,6 +194,8 @@ def study_main(argv, description, measure, report, configs=CONFIGS):
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--report", action="store_true",
                         help="print the table of an existing --out instead of measuring")
+    parser.add_argument("--add", choices=configs, metavar="CONFIG",
+                        help="measure this configuration only and add its rows to --out's")
     args = parser.parse_args(argv)
     if args.report:
         print(report(json.loads(args.out.read_text())["rows"]))
@@ -201,6 +203,8 @@ def study_main(argv, description, measure, report, configs=CONFIGS):
     if args.dataset is None:
         parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
     rows = []
+    if args.add is not None:
+        rows, configs = json.loads(args.out.read_text())["rows"], (args.add,)
     for config in configs:
         rows += measure(args.dataset, config)
         tmp = args.out.with_suffix(".tmp")

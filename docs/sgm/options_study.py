@@ -32,7 +32,9 @@ left path, golden/sgm.py):
   distance (Cmax 55, so P2 <= 72 keeps the path costs at 7 bits): ``ad`` min(|IL(x) -
   IR(x - d)|, 31) >> 2, ``grad`` the same of the horizontal gradients I(x + 1) - I(x - 1)
   (borders replicated), ``ad3`` the 3x3 sum of min(AD, 31) over the window, at most 255,
-  >> 5;
+  >> 5 (borders replicated); ``ad3 exact`` the term as built (golden/cost_term.py: zero
+  padding, right column 0 left out), through the golden SGM cost volume of
+  ``cost_term="ad3"``, at 24/72/5 only (``--add "ad3 exact"`` adds its rows to --out);
 - ``blur``: census 7x7 on images through a 3x3 binomial prefilter (added after teddy with
   noise 2e-3 showed the gap there); the guide of adaptive P2 is the filtered image too;
 - penalties P1, P2 and adaptive P2's t re-chosen on all seven conditions.
@@ -61,7 +63,7 @@ from bench_quality import LR_THRESHOLD, opencv_maps, opencv_matchers  # noqa: E4
 #: Measurement groups, one JSON update each: the peers, each matching cost, the census
 #: cost's grid widened (smaller P1, t = 3 and a constant P2) once the median had changed the
 #: best penalties, and census on prefiltered images (added after teddy with noise).
-GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide", "blur")
+GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide", "blur", "ad3 exact")
 #: Penalty grids (P1, P2, t): the census one around the defaults, the others' P2 at most
 #: 127 - Cmax so that the path costs stay at 7 bits as the defaults' do.
 CENSUS_GRID = list(itertools.product((16, 24, 32), (48, 64, 79), (4, 5)))
@@ -205,16 +207,18 @@ def measure(dataset, group):
     if group == "peers":
         yield from measure_peers(dataset)
         return
-    grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID,
-            "blur": BLUR_GRID}.get(group, EXTRA_GRID)
-    cost = group.split()[0]
+    grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID, "blur": BLUR_GRID,
+            "ad3 exact": [(24, 72, 5)]}.get(group, EXTRA_GRID)
+    cost = group if group == "ad3 exact" else group.split()[0]
     for scene, left, right, truth, disparities in conditions(dataset):
         params = StereoParams(transform="census", block=7, disparities=disparities)
+        if cost == "ad3 exact":
+            params = params.replace(aggregation="sgm", cost_term="ad3")
         if cost == "blur":
             left, right = binomial(left), binomial(right)
         volume = sgm.cost_volume(left, right, params).astype(np.int64)
         max_cost = params.max_cost
-        if cost not in ("census", "blur"):
+        if cost not in ("census", "blur", "ad3 exact"):
             volume = volume + extra_term(cost, left, right, disparities)
             max_cost += 7
             # x - d < 0: no partner pixel, Cmax as golden/sgm.py's cost_volume has it.
@@ -265,7 +269,9 @@ ALONE = [("census", 24, 79, 5, 4, 0, "none"), ("census", 24, 79, 5, 5, 0, "none"
          ("ad3", 24, 72, 5, 4, 0, "none"),
          ("census", 24, 79, 5, 5, 0, "fill"), ("census", 24, 79, 5, 4, 4, "fill"),
          ("ad", 24, 72, 5, 4, 0, "fill"), ("ad3", 24, 72, 5, 4, 0, "fill"),
-         ("ad", 24, 72, 5, 5, 0, "fill"), ("ad3", 24, 72, 5, 5, 0, "fill")]
+         ("ad", 24, 72, 5, 5, 0, "fill"), ("ad3", 24, 72, 5, 5, 0, "fill"),
+         ("ad3 exact", 24, 72, 5, 4, 0, "none"), ("ad3 exact", 24, 72, 5, 4, 0, "fill"),
+         ("ad3 exact", 24, 72, 5, 5, 0, "fill")]
 
 
 def _label(key):
@@ -317,7 +323,8 @@ def report(rows):
                   "| cost, paths, median | best P1/P2/t | " + " | ".join(names)
                   + " | mean | mean vs HH | worst condition vs HH |",
                   "|---|---|" + "---:|" * (len(names) + 3)]
-        for cost, paths, median in itertools.product(("census", "ad", "grad", "ad3", "blur"),
+        for cost, paths, median in itertools.product(("census", "ad", "grad", "ad3", "blur",
+                                                      "ad3 exact"),
                                                      (4, 5),
                                                      ("none", "fill")):
             candidates = [(np.mean(list(values.values())), key, values)

@@ -17,7 +17,8 @@ import tempfile
 from pathlib import Path
 
 from ..flow.tools import ENGINES
-from ...params import (LINE_BUFFERS, LUT_INPUTS, MAX_SUBPIXEL_BITS, P2_ADAPT_OFF, SGM,
+from ...params import (COST_TERMS, LINE_BUFFERS, LUT_INPUTS, MAX_SUBPIXEL_BITS, P2_ADAPT_OFF,
+                       SGM, default_p2,
                        SGM_DEFAULT_ADAPT,
                        SGM_DEFAULT_P1, SGM_DEFAULT_P2, SGM_MAX_ADAPT, TRANSFORMS, StereoParams,
                        UserError, max_path_penalty)
@@ -108,13 +109,18 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
     sgm.add_argument("--p2", type=int, metavar="N",
                      help="penalty of a larger step, P1 <= P2 <= 2^(bitlen(Cmax) + 2) - 1 - "
                           "Cmax for the transform's largest cost Cmax (census 7x7: "
-                          f"{max_path_penalty(census7.max_cost)}) (default {SGM_DEFAULT_P2})")
+                          f"{max_path_penalty(census7.max_cost)}) (default {SGM_DEFAULT_P2}, "
+                          f"{default_p2('ad3')} with --cost-term ad3)")
     adapt = sgm.add_mutually_exclusive_group()
     adapt.add_argument("--p2-adapt", type=int, metavar="T",
                        help=f"adaptive P2: halved for every doubling of the intensity step "
                             f"along the path from 2^T on, 1 <= T <= {SGM_MAX_ADAPT} "
                             f"(default {SGM_DEFAULT_ADAPT})")
     adapt.add_argument("--no-p2-adapt", action="store_true", help="a constant P2")
+    sgm.add_argument("--cost-term", metavar="TERM",
+                     help=f"a term added to the census cost: {', '.join(COST_TERMS)}, the 3x3 "
+                          "sum of clipped absolute pixel differences >> 5 (0 .. 7; Cmax + 7, "
+                          f"default P2 {default_p2('ad3')}; docs/semantics.md) (default none)")
 
 
 def add_lr_arguments(parser):
@@ -187,7 +193,8 @@ def add_engine_arguments(parser, default_workers="one per core"):
 def _sgm_options(args):
     """The SGM options given on the command line, as the user spelled them."""
     given = [name for name, value in (("--p1", args.p1), ("--p2", args.p2),
-                                      ("--p2-adapt", args.p2_adapt)) if value is not None]
+                                      ("--p2-adapt", args.p2_adapt),
+                                      ("--cost-term", args.cost_term)) if value is not None]
     return given + (["--no-p2-adapt"] if args.no_p2_adapt else [])
 
 
@@ -229,7 +236,8 @@ def params_from_args(args, transform=None, block=None, aggregation=None):
         lut_inputs=getattr(args, "lut_inputs", STEREO_DEFAULTS["lut_inputs"]),
         p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
         p2_adapt=adapt if sgm else None, median=getattr(args, "median", False),
-        subpixel_bits=getattr(args, "subpixel_bits", STEREO_DEFAULTS["subpixel_bits"]))
+        subpixel_bits=getattr(args, "subpixel_bits", STEREO_DEFAULTS["subpixel_bits"]),
+        cost_term=args.cost_term if sgm else None)
 
 
 def check_output_folder(value, option="--out"):

@@ -63,8 +63,9 @@ def run(args):
         rows.append({"dataset": pair.name, "condition": condition.label,
                      "transform": p.transform, "block": p.block, "disparities": p.disparities,
                      "rounds": p.rounds, "aggregation": p.aggregation, "p1": p.p1, "p2": p.p2,
-                     "p2_adapt": p.p2_adapt, "median": p.median,
+                     "p2_adapt": p.p2_adapt, "median": p.median, "cost_term": p.cost_term,
                      "aggregation_label": p.describe_aggregation()
+                     + (f", + {p.cost_term}" if p.cost_term else "")
                      + (", 3x3 median" if p.median else ""),
                      "lr_threshold": p.lr_threshold, **quality.as_dict(),
                      "subpixel_bits": p.subpixel_bits,
