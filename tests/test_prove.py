@@ -12,8 +12,9 @@ import re
 import pytest
 
 from npstereo.gen.cli.main import main
-from npstereo.gen.flow.formal import PROPERTIES, first_word_clock, prove
+from npstereo.gen.flow.formal import PROPERTIES, default_depth, first_word_clock, prove
 from npstereo.hdl import median as hdl_median
+from npstereo.hdl import subpixel as hdl_subpixel
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import StereoParams
 
@@ -102,6 +103,30 @@ def test_median_guard_against_stale_rows(broken, tmp_path, monkeypatch):
     else:
         assert {v.status for v in verdicts.values()} == {"bounded"}, verdicts
         assert verdicts["markers"].detail.startswith(f"bounded to depth {depth} (words from")
+
+
+@pytest.mark.parametrize("broken", [False, True])
+def test_word_range_with_the_fraction(broken, tmp_path, monkeypatch):
+    """D = 3, F = 2 (values 0 .. 8): the free group past the first line of words holds
+    (depth 48); with the fit's numerator scaled by 2^(F+2) instead of 2^(F+1), the
+    quotient overflows its 0 .. 2^F and a winner at d = 1 comes out as up to 9:
+    ``word_range`` fails with a trace."""
+    params = StereoParams(transform="census", **{**TINY, "disparities": 3, "width": 4},
+                          subpixel_bits=2)
+    if broken:
+        monkeypatch.setattr(hdl_subpixel, "numerator",
+                            lambda a, denominator, bits: (a << (bits + 2)) + denominator)
+    core = tmp_path / "core.v"
+    core.write_text(core_verilog(params))
+    depth = default_depth(params)
+    verdicts = {v.name: v for v in prove(core, params, tmp_path, depth=depth, timeout=120,
+                                         groups=("free",))}
+    if broken:
+        assert verdicts["word_range"].status == "failed", verdicts["word_range"]
+        assert "$var" in verdicts["word_range"].trace.read_text()
+    else:
+        assert {v.status for v in verdicts.values()} == {"bounded"}, verdicts
+        assert verdicts["word_range"].detail.startswith(f"bounded to depth {depth} (words")
 
 
 def _broken_core(params, wrapper):
