@@ -9,6 +9,7 @@ here, the memory bits against the architecture's formula, and every run against 
 first one.
 """
 
+import dataclasses
 import json
 import os
 import signal
@@ -418,3 +419,14 @@ def test_explore_with_median_and_fraction(capsys, tmp_path):
     text = (tmp_path / "o" / "explore.md").read_text()
     row = next(line for line in text.splitlines() if line.startswith("| census 3x3 R=2 A=3 median F=4 |"))
     assert f"| {point['quality']['clean']['mean_error']:,.3f} |" in row
+
+
+def test_plot_labels_name_the_varying_output_options():
+    from npstereo.gen.cli.cmd_explore import _medians, _short_labels
+    assert (_medians(None), _medians([]), _medians(["off", "on"])) == (
+        (False,), (True,), (False, True))
+    chosen, _ = configurations(Grid(("census",), (3,), (2,), (3,), ("auto",), 8, 32, 8,
+                                    medians=(False, True), subpixel_bits=(0, 4)))
+    points = [{"params": dataclasses.asdict(p)} for p in chosen]
+    assert _short_labels(points) == ["census 3 no median F=0", "census 3 no median F=4",
+                                     "census 3 median F=0", "census 3 median F=4"]
