@@ -3,8 +3,8 @@ core, and a map no larger than the screen.
 
 The pair is one 16-bit word per pixel (:class:`~npstereo.hdl.stream.PixelPair`), the
 frame buffer one output value (F fractional bits included) and its valid flag per pixel,
-the colour ROM 24 bits for each of the (D - 1) 2^F + 1 values; all three, and the core's memories
-(:func:`npstereo.hdl.plan_memories.memories`), are counted in ECP5 DP16KD blocks, each
+the colour ROM 24 bits for each of the (D - 1) 2^F + 1 values; all three, and the core's
+memories (:func:`npstereo.hdl.plan_memories.memories`), are counted in ECP5 DP16KD blocks, each
 memory in the block shape that needs the fewest (16K x 1 .. 1K x 18). Memories of fewer
 than :data:`LUT_RAM_DEPTH` words go to LUT RAM and count no block. This is an estimate
 made before anything is built: the synthesis report (``yosys.log``) has Yosys' count.

@@ -9,8 +9,8 @@ run in four groups, one ``.sby`` file each (one elaboration per group):
 - ``induction``: output held under backpressure, reset from any state; unbounded proofs
   with ABC's PDR (``abc pdr``, native ``yosys-abc`` from pyosys, no SMT solver), after a
   bounded check that finds a shallow counterexample quickly;
-- ``free``, ``framed``, ``misframed``: the frame markers, no output without input, whole
-  frames, recovery after misframing, as bounded model checks (``abc bmc3``) to ``depth``
+- ``free``, ``framed``, ``misframed``: the frame markers, no output without input, the
+  words' range (0 .. (D - 1) 2^F with F fractional bits), whole frames, recovery after misframing, as bounded model checks (``abc bmc3``) to ``depth``
   clocks. PDR did not close them in minutes even on the smallest cores (their invariants
   tie the harness's counters to the core's credits and queues), and the SAT problems
   harden steeply once words come out (census 3x3 D=2 R=1 at 3x2, whose first word comes
