@@ -9,6 +9,10 @@ map is scored with the project's own metric (golden/quality.py: |d - gt| <= 1 ov
 pixels with known ground truth at x >= D, an invalid pixel counts as wrong), with and
 without the project's L/R check (threshold 3), and the table ends with the ratio of the
 best npstereo SGM configuration to the best peer. The bar of issue 12: ratio >= 1.
+A last column gives the mean |d - gt| of the correct pixels, where a sub-pixel fraction
+shows (issue 28): the README's recommendation with F = 4 fractional bits has its row, and
+OpenCV's SGBM maps with their own 1/16 fractions kept have theirs ("peer fraction", beside
+the bar, not in it).
 
 The peers (``opencv-python-headless``, a ``bench``/``test`` extra of the project):
 
@@ -52,7 +56,8 @@ from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.lr_check import INVALID, lr_check
 from npstereo.golden.median import median3
 from npstereo.golden.pipeline import disparity_map
-from npstereo.golden.quality import evaluate
+from npstereo.golden.quality import evaluate, mean_absolute_error
+from npstereo.golden.subpixel import levels
 from npstereo.golden.synthetic import synthetic_pair
 from npstereo.params import SGM_RECOMMENDED, StereoParams, UserError
 
@@ -63,15 +68,20 @@ LR_THRESHOLD = 3
 BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 
 #: npstereo SGM configurations: (transform, block, P1, P2, adaptive-P2 exponent, 3x3
-#: median). The recommended ones first: the default (docs/sgm.md, "Choosing the defaults")
-#: and the best census 5x5 on clean real scenes; then the best census 5x5 with a constant
-#: P2; then the defaults with the 3x3 median (issue 28, docs/sgm.md "Quality options"), and
-#: with the median at the penalties its study chose (P1 = 16, t = 4); then the median with
-#: the ad3 cost term at its default P2 (a seventh field: the cost term).
+#: median, sub-pixel bits F[, cost term]). The recommended ones first: the default
+#: (docs/sgm.md, "Choosing the defaults") and the best census 5x5 on clean real scenes; then
+#: the best census 5x5 with a constant P2; then the defaults with the 3x3 median (issue 28,
+#: docs/sgm.md "Quality options"), and with the median at the penalties its study chose
+#: (P1 = 16, t = 4); the README's recommendation (the defaults with the median) with F = 4
+#: fractional bits (docs/sgm.md, "Sub-pixel output"); last the median with the ad3 cost
+#: term at its default P2.
+_DEFAULTS = tuple(SGM_RECOMMENDED[0][name]
+                  for name in ("transform", "block", "p1", "p2", "p2_adapt"))
+SUBPIXEL_BITS = 4
 SGM = [tuple(fields[name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
-       + (False,) for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None, False)] + [
-    tuple(SGM_RECOMMENDED[0][name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
-    + (True,), ("census", 7, 16, 79, 4, True), ("census", 7, 24, 72, 5, True, "ad3")]
+       + (False, 0) for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None, False, 0)] + [
+    _DEFAULTS + (True, 0), ("census", 7, 16, 79, 4, True, 0), _DEFAULTS + (True, SUBPIXEL_BITS),
+    ("census", 7, 24, 72, 5, True, 0, "ad3")]
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).
@@ -94,8 +104,9 @@ def opencv_matchers(cv2, num_disparities):
     return peers
 
 
-def opencv_map(cv2, matcher, left, right, disparities, num_disparities):
-    """Integer left-referenced map of an OpenCV matcher, INVALID outside 0 .. D - 1."""
+def opencv_map(cv2, matcher, left, right, disparities, num_disparities, fraction=False):
+    """Integer left-referenced map of an OpenCV matcher, INVALID outside 0 .. D - 1; with
+    ``fraction`` the same map in OpenCV's 1/16 levels (float32, -1 invalid)."""
     # OpenCV leaves its numDisparities leftmost columns invalid; padding by as many
     # replicated columns gives every column of the image a result.
     pad = num_disparities
@@ -105,6 +116,8 @@ def opencv_map(cv2, matcher, left, right, disparities, num_disparities):
     # Fixed point with 4 fractional bits; round half up to the nearest integer.
     rounded = (raw + 8) >> 4
     invalid = (raw < 0) | (rounded > disparities - 1)
+    if fraction:
+        return np.where(invalid, INVALID, raw / np.float32(16)).astype(np.float32)
     return np.where(invalid, INVALID, rounded).astype(np.int16)
 
 
@@ -129,10 +142,40 @@ def opencv_maps(cv2, matcher, left, right, disparities, num_disparities):
     return left_map, checked
 
 
+def opencv_fraction_maps(cv2, matcher, left, right, disparities, num_disparities):
+    """:func:`opencv_maps` with OpenCV's 1/16 fractions kept where the (whole-level) check
+    keeps a pixel: the peer of npstereo's sub-pixel output."""
+    maps = opencv_maps(cv2, matcher, left, right, disparities, num_disparities)
+    fine = opencv_map(cv2, matcher, left, right, disparities, num_disparities, fraction=True)
+    return tuple(np.where(whole >= 0, fine, np.float32(INVALID)) for whole in maps)
+
+
 def score(disparity, truth, disparities):
     quality = evaluate(disparity, truth, disparities)
     return dict(correct=quality.correct, density=quality.density,
-                error_rate=quality.error_rate)
+                error_rate=quality.error_rate,
+                mean_error=mean_absolute_error(disparity, truth, disparities))
+
+
+def sgm_maps(left, right, transform, block, disparities, p1, p2, adapt, median, bits,
+             cost_term=None):
+    """(map without check, map after the L/R check) of an npstereo SGM configuration, in
+    levels (with F > 0 float32 with the fraction). The unchecked map with F > 0 is the
+    fitted map of a run without the check (the checked run's raw maps are whole levels)."""
+    term = dict(aggregation="sgm", cost_term=cost_term) if cost_term else {}
+    params = StereoParams(transform=transform, block=block, disparities=disparities,
+                          lr_threshold=LR_THRESHOLD, subpixel_bits=bits, **term)
+    result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
+    unchecked = result.left.copy()
+    if bits:
+        unchecked = sgm.disparity_map(left, right, params.replace(lr_threshold=None), p1, p2,
+                                      adapt=adapt).disparity.copy()
+    unchecked[:, :disparities] = INVALID
+    maps = (unchecked, result.disparity)
+    if median:
+        # As in hardware: the median of the output values (scaled by 2^F).
+        maps = tuple(median3(disparity) for disparity in maps)
+    return tuple(levels(disparity, bits) for disparity in maps)
 
 
 def load(args):
@@ -211,32 +254,34 @@ def main(argv=None):
         unchecked[:, :params.first_valid_column] = INVALID
         add("npstereo box", f"npstereo {transform} {block}x{block}, {aggregation}x{aggregation}"
             f" box", (unchecked, result.disparity), time.perf_counter() - start)
-    for transform, block, p1, p2, adapt, median, *term in SGM:
+    for transform, block, p1, p2, adapt, median, bits, *term in SGM:
         start = time.perf_counter()
-        params = StereoParams(transform=transform, block=block, disparities=disparities,
-                              lr_threshold=LR_THRESHOLD,
-                              **(dict(aggregation="sgm", cost_term=term[0]) if term else {}))
-        result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
-        unchecked = result.left.copy()
-        unchecked[:, :disparities] = INVALID
-        maps = (unchecked, result.disparity)
-        if median:
-            maps = tuple(median3(disparity) for disparity in maps)
+        maps = sgm_maps(left, right, transform, block, disparities, p1, p2, adapt, median,
+                        bits, *term)
         p2_text = f"P2={p2}" + (f" adaptive t={adapt}" if adapt is not None else "")
         add("npstereo SGM", f"npstereo {transform} {block}x{block}, SGM 4 paths P1={p1} "
             f"{p2_text}" + (f", + {term[0]}" if term else "")
-            + (", 3x3 median" if median else ""), maps,
-            time.perf_counter() - start)
+            + (", 3x3 median" if median else "")
+            + (f", sub-pixel F={bits}" if bits else ""), maps, time.perf_counter() - start)
     for name, matcher in opencv_matchers(cv2, num_disparities):
         start = time.perf_counter()
         maps = opencv_maps(cv2, matcher, left, right, disparities, num_disparities)
         add("peer", name, maps, time.perf_counter() - start)
+        if "SGBM" in name:
+            # Beside npstereo's fraction, OpenCV's own (not a peer of the bar: rounded,
+            # above, is the stricter one).
+            start = time.perf_counter()
+            maps = opencv_fraction_maps(cv2, matcher, left, right, disparities,
+                                        num_disparities)
+            add("peer fraction", f"{name}, 1/16 fraction", maps, time.perf_counter() - start)
 
-    print("\n| method | L/R check | correct (%) | density (%) | error rate (%) | seconds |")
-    print("|---|---|---:|---:|---:|---:|")
+    print("\n| method | L/R check | correct (%) | density (%) | error rate (%) | "
+          "mean abs. error of correct (levels) | seconds |")
+    print("|---|---|---:|---:|---:|---:|---:|")
     for row in rows:
         print(f"| {row['method']} | {row['lr_check']} | {row['correct']:.2f} | "
-              f"{row['density']:.2f} | {row['error_rate']:.2f} | {row['seconds']:.1f} |")
+              f"{row['density']:.2f} | {row['error_rate']:.2f} | {row['mean_error']:.3f} | "
+              f"{row['seconds']:.1f} |")
     best = {family: max((r for r in rows if r["family"] == family), key=lambda r: r["correct"])
             for family in ("npstereo box", "npstereo SGM", "peer")}
     best_sgm_checked = max((r for r in rows if r["family"] == "npstereo SGM"

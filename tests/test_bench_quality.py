@@ -133,3 +133,41 @@ def test_real_opencv_on_a_synthetic_pair():
     # removes pixels (occlusions), never adds them.
     for unchecked_score, checked_score in scores.values():
         assert unchecked_score > 80 and checked_score <= unchecked_score
+
+
+def test_fraction_map_keeps_sixteenths():
+    disparities, nd = 20, 32
+    raw = np.zeros((1, 6 + nd), np.int16)
+    raw[0, nd:] = [-16, 24, 23, 16 * 19 + 7, 16 * 19 + 8, 16 * 25]
+    got = bench_quality.opencv_map(FakeCv2, FixedMatcher(raw), np.zeros((1, 6), np.uint8),
+                                   np.zeros((1, 6), np.uint8), disparities, nd, fraction=True)
+    # The range rule is the rounded map's: 19.5 rounds to 20 > D - 1 and is invalid.
+    assert got.dtype == np.float32 and got.tolist() == [[-1, 1.5, 1.4375, 19.4375, -1, -1]]
+
+
+def test_fraction_maps_follow_the_whole_level_check():
+    left, right = shifted_pair(4, width=70, seed=3)
+    whole = bench_quality.opencv_maps(FakeCv2, ExactMatcher(16), left, right, 12, 16)
+    fine = bench_quality.opencv_fraction_maps(FakeCv2, ExactMatcher(16), left, right, 12, 16)
+    for w, f in zip(whole, fine):
+        assert np.array_equal(w < 0, f < 0) and np.array_equal(f[w >= 0], w[w >= 0])
+
+
+@pytest.mark.parametrize("median", [False, True])
+def test_subpixel_row_scores_the_fraction(median):
+    """The F = 4 row: float levels in both maps (the unchecked one from a run without the
+    check: the checked run's raw map has whole levels only), each within half a level of
+    the F = 0 map, where the median (on values scaled by 2^F) allows it."""
+    from npstereo.golden.synthetic import synthetic_pair
+    pair = synthetic_pair(64, 24, 16, seed=1)
+    left, right = pair.gray()
+    args = (left, right, "census", 5, 16, 8, 32, 5, median)
+    whole = bench_quality.sgm_maps(*args, 0)
+    fine = bench_quality.sgm_maps(*args, 4)
+    for w, f in zip(whole, fine):
+        assert w.dtype == np.int16 and f.dtype == np.float32
+        assert (f[f >= 0] != np.round(f[f >= 0])).any()
+        assert np.all(np.round(f[f >= 0] * 16) == f[f >= 0] * 16)
+        if not median:
+            assert np.array_equal(w < 0, f < 0)
+            assert np.abs(f[w >= 0] - w[w >= 0]).max() <= 0.5

@@ -13,7 +13,7 @@ from amaranth.sim import Simulator
 from PIL import Image
 
 from npstereo.gen.board.display import DepthDisplay
-from npstereo.gen.board.fit import BOARDS, largest_pair
+from npstereo.gen.board.fit import BOARDS, display_blocks, largest_pair
 from npstereo.gen.board.tmds import CONTROL_SYMBOLS, TMDSEncoder
 from npstereo.gen.board.verify import capture_amaranth, compare
 from npstereo.gen.board.video import VideoTiming, colour_table, expected_frame
@@ -52,6 +52,40 @@ def test_board_top_with_an_off_by_one_colour_map_fails(small_board):
     """Broken variant: the colour ROM shifted by one disparity."""
     params, left, right, expected = small_board
     shifted = np.roll(colour_table(params.disparities), 1, axis=0)
+    capture = capture_amaranth(DepthDisplay(params, left, right, SMALL_TIMING, shifted),
+                               SMALL_TIMING)
+    check = compare(expected, capture, SMALL_TIMING)
+    assert not check.ok and check.mismatches > 0, check.message()
+
+
+@pytest.fixture(scope="module")
+def fraction_board():
+    """The small board with the 3x3 median and F = 3 fractional bits: the frame buffer
+    holds the values, the colour ROM has one entry for each of 0 .. (D - 1) 2^3."""
+    pair = synthetic_pair(width=32, height=12, disparities=8, seed=1)
+    left, right = pair.gray()
+    params = StereoParams(transform="census", block=5, disparities=8, rounds=2,
+                          width=32, height=12, median=True, subpixel_bits=3)
+    golden = disparity_map(left, right, params).disparity
+    assert ((golden >= 0) & (golden % 8 != 0)).any() and (golden < 0).any()
+    return params, left, right, expected_frame(golden, 8, SMALL_TIMING, bits=3)
+
+
+def test_board_top_with_median_and_fraction_is_bit_exact(fraction_board):
+    params, left, right, expected = fraction_board
+    assert len(colour_table(8, 3)) == 7 * 8 + 1
+    # A whole level keeps its F = 0 colour.
+    assert np.array_equal(colour_table(8, 3)[::8], colour_table(8))
+    capture = capture_amaranth(DepthDisplay(params, left, right, SMALL_TIMING), SMALL_TIMING)
+    check = compare(expected, capture, SMALL_TIMING)
+    assert check.ok, check.message()
+
+
+def test_board_top_with_the_fraction_off_by_one_step_fails(fraction_board):
+    """Broken variant: the colour ROM shifted by one step of 1/8 level (the fraction's
+    last bit shows on the screen)."""
+    params, left, right, expected = fraction_board
+    shifted = np.roll(colour_table(8, 3), 1, axis=0)
     capture = capture_amaranth(DepthDisplay(params, left, right, SMALL_TIMING, shifted),
                                SMALL_TIMING)
     check = compare(expected, capture, SMALL_TIMING)
@@ -240,3 +274,25 @@ def test_a_path_between_the_clocks_is_held_to_the_faster_period(tmp_path):
     assert crossings == [("pixel", "shift", 1.7, 8.0)]
     (_, _, delay, budget), = report(9.0)[1]
     assert delay > budget
+
+
+@pytest.mark.parametrize("bits", ["6", "-1"])
+def test_subpixel_bits_out_of_range_is_refused(bits, tmp_path, capsys):
+    assert main(["board", "ulx3s-85f", "--subpixel-bits", bits,
+                 "--out", str(tmp_path / "out")]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.splitlines() == [
+        f"npstereo: error: subpixel bits must be an integer 0 .. 5, not {bits}"]
+    assert "Traceback" not in captured.err + captured.out
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_fraction_counts_in_the_block_ram():
+    """The frame buffer's F more bits and the colour ROM of (D - 1) 2^F + 1 entries."""
+    params = StereoParams(transform="census", block=9, disparities=32, rounds=4,
+                          width=160, height=120)
+    board = BOARDS["ulx3s-85f"]
+    whole, fine = largest_pair(board, params), largest_pair(board, params.replace(
+        subpixel_bits=5))
+    assert display_blocks(160 * 120, params.replace(subpixel_bits=5)) > display_blocks(
+        160 * 120, params) and fine < whole

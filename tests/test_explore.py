@@ -9,6 +9,7 @@ here, the memory bits against the architecture's formula, and every run against 
 first one.
 """
 
+import dataclasses
 import json
 import os
 import signal
@@ -18,6 +19,7 @@ import sys
 import threading
 import time
 
+import numpy as np
 import psutil
 import pytest
 from distributed import Client
@@ -249,6 +251,7 @@ def test_unreachable_scheduler_is_one_line_within_10_s(capsys, tmp_path):
     ({"--workers": "0"}, "--workers must be an integer >= 1, not 0"),
     ({"--width": "8"}, "image width must be an integer > 8"),
     ({"--block": "33"}, "block size must be <= 31 for the hardware"),
+    ({"--median": "maybe"}, "argument --median: invalid choice: 'maybe'"),
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(change, message, capsys, tmp_path):
     argv = list(GRID)
@@ -283,7 +286,8 @@ def test_grid_order_and_aggregation_values_pass_through():
     mixed, skipped = configurations(Grid(("census",), (3, 7), (8,), (3, "sgm"), ("auto",),
                                          8, 32, 8))
     assert [(p.block, p.aggregation) for p in mixed] == [(3, 3), (7, 3), (7, "sgm")]
-    assert len(skipped) == 1 and skipped[0].startswith("('census', 3, 8, 'sgm', 'auto'): P2")
+    assert len(skipped) == 1 and skipped[0].startswith(
+        "('census', 3, 8, 'sgm', 'auto', False, 0): P2")
     # A value that no combination takes is an error of its own.
     with pytest.raises(ParameterError, match="P2 must be <= 55"):
         configurations(Grid(("census",), (3,), (8,), (3, "sgm"), ("auto",), 8, 32, 8))
@@ -345,3 +349,84 @@ def test_ecp5_synthesis_is_shared_by_every_part_and_with_report(tmp_path):
         assert plan.tasks == [] and plan.synthesis[0]["results"]["ecp5"] == report
     placed = plan_tasks([params], {}, DEVICES["ecp5-25k"], True, 150.0, None, cache, None)
     assert [task.args[-1] for task in placed.tasks] == ["ecp5-25k"]
+
+
+@pytest.mark.parametrize("bits", ["6", "-1"])
+def test_subpixel_bits_out_of_range_is_one_line(bits, capsys, tmp_path):
+    out, cache = tmp_path / "out", tmp_path / "cache"
+    assert main(["explore", *GRID, "--subpixel-bits", "0", bits, "--out", str(out),
+                 "--cache", str(cache)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.splitlines() == [
+        f"npstereo: error: subpixel bits must be an integer 0 .. 5, not {bits}"]
+    assert "Traceback" not in captured.err + captured.out
+    assert not out.exists() and not cache.exists()
+    assert main(["explore", *GRID, "--subpixel-bits", "--out", str(out), "--cache",
+                 str(cache)]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "npstereo: error: the grid is empty: --subpixel-bits has no values"]
+
+
+def test_median_and_subpixel_axes():
+    grid = Grid(("census",), (3,), (2,), (3,), ("auto",), 8, 32, 8, medians=(False, True),
+                subpixel_bits=(0, 4))
+    chosen, skipped = configurations(grid)
+    assert skipped == [] and [(p.median, p.subpixel_bits) for p in chosen] == [
+        (False, 0), (False, 4), (True, 0), (True, 4)]
+
+
+def test_quality_scores_the_fraction():
+    """With F = 4 the quality task scores the fractional disparities: the golden model's
+    levels and their mean error over the correct pixels, which the same map rounded to
+    whole levels (a fraction dropped before scoring) does not give."""
+    from npstereo.gen.explore.explorer import quality_task
+    from npstereo.golden.quality import mean_absolute_error
+    pair = synthetic_pair(64, 24, 16, seed=0)
+    left, right = pair.gray()
+    for bits in (0, 4):
+        params = StereoParams(transform="census", block=5, disparities=16, subpixel_bits=bits)
+        result = quality_task((left, right, pair.ground_truth), params, None, "k")
+        disparity = match_images(left, right, params)
+        assert (disparity.dtype.kind == "f") == (bits > 0)
+        expected = evaluate(disparity, pair.ground_truth, 16).as_dict()
+        assert {k: result[k] for k in QUALITY_FIGURES} == expected
+        error = mean_absolute_error(disparity, pair.ground_truth, 16)
+        assert result["mean_error"] == round(error, 4)
+    rounded = np.where(disparity >= 0, np.round(disparity), -1)
+    assert round(mean_absolute_error(rounded, pair.ground_truth, 16), 4) != result["mean_error"]
+
+
+@pytest.mark.dask
+def test_explore_with_median_and_fraction(capsys, tmp_path):
+    """One core with the median and F = 4 through the whole command: its label, its
+    parameters in explore.json and its row with the mean error in explore.md."""
+    argv = ["explore", "--synthetic", "--transform", "census", "--block", "3", "--rounds",
+            "2", "--disparities", str(DISPARITIES), "--width", str(WIDTH), "--height",
+            str(HEIGHT), "--device", "cyclonev-a9", "--median", "--subpixel-bits", "4",
+            "--workers", "1", "--cache", str(tmp_path / "cache"), "--out", str(tmp_path / "o")]
+    assert main(argv) == 0
+    document = json.loads((tmp_path / "o" / "explore.json").read_text())
+    (point,) = document["points"]
+    assert point["params"]["median"] is True and point["params"]["subpixel_bits"] == 4
+    assert point["label"] == "census 3x3 R=2 A=3 median F=4"
+    assert point["synthesis"]["status"] == "ok"
+    params = StereoParams(transform="census", block=3, disparities=DISPARITIES, rounds=2,
+                          median=True, subpixel_bits=4)
+    pair = synthetic_pair(WIDTH, HEIGHT, DISPARITIES, seed=0)
+    left, right = pair.gray()
+    expected = evaluate(match_images(left, right, params), pair.ground_truth, DISPARITIES)
+    assert {k: point["quality"]["clean"][k] for k in QUALITY_FIGURES} == expected.as_dict()
+    text = (tmp_path / "o" / "explore.md").read_text()
+    row = next(line for line in text.splitlines() if line.startswith("| census 3x3 R=2 A=3 median F=4 |"))
+    assert f"| {point['quality']['clean']['mean_error']:,.3f} |" in row
+
+
+def test_plot_labels_name_the_varying_output_options():
+    from npstereo.gen.cli.cmd_explore import _medians, _short_labels
+    assert (_medians(None), _medians([]), _medians(["off", "on"])) == (
+        (False,), (True,), (False, True))
+    chosen, _ = configurations(Grid(("census",), (3,), (2,), (3,), ("auto",), 8, 32, 8,
+                                    medians=(False, True), subpixel_bits=(0, 4)))
+    points = [{"params": dataclasses.asdict(p)} for p in chosen]
+    assert _short_labels(points) == ["census 3 no median F=0", "census 3 no median F=4",
+                                     "census 3 median F=0", "census 3 median F=4"]

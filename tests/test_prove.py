@@ -12,7 +12,9 @@ import re
 import pytest
 
 from npstereo.gen.cli.main import main
-from npstereo.gen.flow.formal import PROPERTIES, prove
+from npstereo.gen.flow.formal import PROPERTIES, default_depth, first_word_clock, prove
+from npstereo.hdl import median as hdl_median
+from npstereo.hdl import subpixel as hdl_subpixel
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import StereoParams
 
@@ -60,6 +62,70 @@ def test_bounded_groups_on_census(tmp_path, capsys):
         assert (tmp_path / f"{group}.sby").exists()
     verdicts = (tmp_path / "verdict.tsv").read_text().splitlines()
     assert [v.split("\t")[0] for v in verdicts] == [p.name for p in bounded]
+
+
+@pytest.mark.parametrize("extra", [
+    ["--median"],
+    # D = 5 and F = 5: the word grows to 16 bits (3 + 5 bits and the valid flag).
+    ["--disparities", "5", "--width", "6", "--subpixel-bits", "5"]])
+def test_unbounded_proofs_with_median_and_subpixel(extra, tmp_path, capsys):
+    argv = _argv("census", tmp_path, "--aggregation", "1", "--no-lr-check", "--checks",
+                 "induction", "--depth", "4", *extra)
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^hold +proven \(unbounded, PDR\)", out, re.M), out
+    assert re.search(r"^reset +proven \(unbounded, PDR\)", out, re.M), out
+    if "5" in extra:
+        assert "output [15:0] m_axis_tdata" in (tmp_path / "core.v").read_text()
+
+
+#: The median's smallest core; its first word leaves at clock 39 at the earliest.
+MEDIAN = {**TINY, "median": True}
+
+
+@pytest.mark.parametrize("broken", [False, True])
+def test_median_guard_against_stale_rows(broken, tmp_path, monkeypatch):
+    """The free group past the median core's first word (depth 42) holds; with the
+    median's priming guard removed (a window of rows written before the reset counts as
+    words), the stale row's word comes out after a reset and ``markers`` fails."""
+    params = StereoParams(transform="census", **MEDIAN)
+    depth = first_word_clock(params) + 3
+    if broken:
+        monkeypatch.setattr(hdl_median, "_priming_ticks", lambda width: 0)
+    core = tmp_path / "core.v"
+    core.write_text(core_verilog(params))
+    verdicts = {v.name: v for v in prove(core, params, tmp_path, depth=depth, timeout=120,
+                                         groups=("free",))}
+    if broken:
+        assert verdicts["markers"].status == "failed", verdicts["markers"]
+        assert "$var" in verdicts["markers"].trace.read_text()
+    else:
+        assert {v.status for v in verdicts.values()} == {"bounded"}, verdicts
+        assert verdicts["markers"].detail.startswith(f"bounded to depth {depth} (words from")
+
+
+@pytest.mark.parametrize("broken", [False, True])
+def test_word_range_with_the_fraction(broken, tmp_path, monkeypatch):
+    """D = 3, F = 2 (values 0 .. 8): the free group past the first line of words holds
+    (depth 48); with the fit's numerator scaled by 2^(F+2) instead of 2^(F+1), the
+    quotient overflows its 0 .. 2^F and a winner at d = 1 comes out as up to 9:
+    ``word_range`` fails with a trace."""
+    params = StereoParams(transform="census", **{**TINY, "disparities": 3, "width": 4},
+                          subpixel_bits=2)
+    if broken:
+        monkeypatch.setattr(hdl_subpixel, "numerator",
+                            lambda a, denominator, bits: (a << (bits + 2)) + denominator)
+    core = tmp_path / "core.v"
+    core.write_text(core_verilog(params))
+    depth = default_depth(params)
+    verdicts = {v.name: v for v in prove(core, params, tmp_path, depth=depth, timeout=120,
+                                         groups=("free",))}
+    if broken:
+        assert verdicts["word_range"].status == "failed", verdicts["word_range"]
+        assert "$var" in verdicts["word_range"].trace.read_text()
+    else:
+        assert {v.status for v in verdicts.values()} == {"bounded"}, verdicts
+        assert verdicts["word_range"].detail.startswith(f"bounded to depth {depth} (words")
 
 
 def _broken_core(params, wrapper):
@@ -159,3 +225,13 @@ def test_bad_input_is_one_line(extra, message, tmp_path, capsys):
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and message in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("bits", ["6", "-1"])
+def test_subpixel_bits_out_of_range_is_one_line(bits, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["prove", "--subpixel-bits", bits, "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.splitlines() == [
+        f"npstereo: error: subpixel bits must be an integer 0 .. 5, not {bits}"]
+    assert "Traceback" not in captured.err + captured.out and not out.exists()

@@ -24,10 +24,12 @@ from hypothesis import strategies as st
 from npstereo.gen.cli import cmd_cosim
 from npstereo.gen.cli.arguments import params_from_args
 from npstereo.gen.cli.main import build_parser
+from npstereo.hdl import subpixel as hdl_subpixel
 from npstereo.hdl import trees
 from npstereo.hdl.plan import check_buildable, sgm_min_width
-from npstereo.params import (LINE_BUFFERS, LUT_INPUTS, P2_ADAPT_OFF, SGM, SGM_MAX_ADAPT,
-                             TRANSFORMS, ParameterError, StereoParams, max_path_penalty)
+from npstereo.params import (LINE_BUFFERS, LUT_INPUTS, MAX_SUBPIXEL_BITS, P2_ADAPT_OFF, SGM,
+                             SGM_MAX_ADAPT, TRANSFORMS, ParameterError, StereoParams,
+                             max_path_penalty)
 from npstereo.sim.cosim import run_frame
 
 #: Examples per run: a minute of Amaranth's simulator in ``make test``; ``make soak`` sets
@@ -73,6 +75,12 @@ def cosim_argv(draw, simulator="amaranth"):
     argv += ["--no-lr-check"] if threshold is None else ["--lr-threshold", str(threshold)]
     argv += ["--line-buffer", draw(st.sampled_from(LINE_BUFFERS)),
              "--lut-inputs", str(draw(st.sampled_from(LUT_INPUTS)))]
+    # The output options: the 3x3 median, and whole levels half the time, F = 1 .. 5
+    # fractional bits otherwise.
+    if draw(st.booleans()):
+        argv += ["--median"]
+    if draw(st.booleans()):
+        argv += ["--subpixel-bits", str(draw(st.integers(1, MAX_SUBPIXEL_BITS)))]
     try:
         params = params_from_args(_parse(["cosim", "--simulator", simulator, "--synthetic",
                                           "--out", "x", *argv]))
@@ -134,6 +142,23 @@ def test_broken_hardware_is_caught(monkeypatch):
         broken()
 
 
+def test_broken_fraction_is_caught(monkeypatch):
+    """The fit's offset rounded down instead of half up (the numerator without its a + b):
+    the same property fails on the draws with F > 0."""
+    monkeypatch.setattr(hdl_subpixel, "numerator",
+                        lambda a, denominator, bits: a << (bits + 1))
+
+    @settings(max_examples=10, derandomize=True, deadline=None, database=None,
+              phases=[Phase.generate], suppress_health_check=list(HealthCheck))
+    @given(argv=cosim_argv())
+    def broken(argv):
+        if "--subpixel-bits" in argv:
+            _check(argv)
+
+    with pytest.raises(AssertionError, match="reproduce: npstereo cosim .*--subpixel-bits"):
+        broken()
+
+
 @pytest.fixture(scope="module", autouse=True)
 def _report():
     yield
@@ -144,12 +169,19 @@ def _report():
 def test_strategy_draws_only_valid_configurations():
     """Every drawn command line parses and builds valid parameters (the strategy's own
     check, with no simulation)."""
+    drawn = []
+
     @settings(max_examples=40, derandomize=True, database=None,
               suppress_health_check=list(HealthCheck))
     @given(argv=cosim_argv())
     def valid(argv):
         args = _parse(argv)
         _, left, _ = cmd_cosim._frame(args)
-        check_buildable(params_from_args(args).with_size(left.shape[1], left.shape[0]))
+        params = params_from_args(args).with_size(left.shape[1], left.shape[0])
+        check_buildable(params)
+        drawn.append(params)
 
     valid()
+    # The output options are drawn too, each of them on and off.
+    assert {p.median for p in drawn} == {False, True}
+    assert {p.subpixel_bits > 0 for p in drawn} == {False, True}

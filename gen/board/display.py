@@ -35,15 +35,16 @@ class Scanout(wiring.Component):
     """Video timing and the colour-mapped frame buffer at the beam's position.
 
     ``address``/``word`` are the frame buffer's read port (registered read: the word of an
-    address comes a clock later), ``word`` being a disparity with its valid flag on top.
+    address comes a clock later), ``word`` being an output value (a disparity scaled by
+    2^``bits``) with its valid flag on top.
     ``r``, ``g``, ``b``, ``hsync``, ``vsync`` and ``de`` are what the TMDS encoders take.
     """
 
-    def __init__(self, timing, width, height, disparities, colours=None):
+    def __init__(self, timing, width, height, disparities, colours=None, bits=0):
         self.timing = timing
         self.where = placement(width, height, timing)
-        self.colours = colour_table(disparities) if colours is None else colours
-        self.disparity_bits = max(1, (disparities - 1).bit_length())
+        self.colours = colour_table(disparities, bits) if colours is None else colours
+        self.disparity_bits = max(1, (disparities - 1).bit_length()) + bits
         super().__init__({
             "address": Out(range(width * height)),
             "word": wiring.In(self.disparity_bits + 1),
@@ -131,8 +132,9 @@ class DepthDisplay(wiring.Component):
     left, right : (H, W) uint8 arrays
         The stored pair.
     timing : VideoTiming
-    colours : (D, 3) uint8 array, optional
-        The colour ROM (default :func:`~.video.colour_table`).
+    colours : ((D-1) 2^F + 1, 3) uint8 array, optional
+        The colour ROM of the output values (default :func:`~.video.colour_table`; with
+        F = 0 one entry a disparity).
 
     Members
     -------
@@ -147,7 +149,7 @@ class DepthDisplay(wiring.Component):
         self.words = WordCodec(params).pack_pixels(left, right).tolist()
         self.core = NpStereoCore(params)
         self.scanout = Scanout(timing, params.width, params.height, params.disparities,
-                               colours)
+                               colours, params.subpixel_bits)
         super().__init__({"r": Out(8), "g": Out(8), "b": Out(8), "hsync": Out(1),
                           "vsync": Out(1), "de": Out(1), "map_ready": Out(1)})
 
@@ -180,7 +182,7 @@ class DepthDisplay(wiring.Component):
         with m.If(taken):
             m.d.sync += [index.eq(following), column.eq(Mux(column == width - 1, 0, column + 1))]
 
-        # The frame buffer: one word per output beat, the disparity with the valid flag on top.
+        # The frame buffer: one word per output beat, the value with the valid flag on top.
         word_bits = scan.disparity_bits + 1
         m.submodules.frame = frame = Memory(shape=unsigned(word_bits), depth=pixels, init=[])
         write, shown = frame.write_port(), frame.read_port()

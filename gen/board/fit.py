@@ -2,8 +2,9 @@
 core, and a map no larger than the screen.
 
 The pair is one 16-bit word per pixel (:class:`~npstereo.hdl.stream.PixelPair`), the
-frame buffer one disparity and its valid flag per pixel; both, and the core's memories
-(:func:`npstereo.hdl.plan_memories.memories`), are counted in ECP5 DP16KD blocks, each
+frame buffer one output value (F fractional bits included) and its valid flag per pixel,
+the colour ROM 24 bits for each of the (D - 1) 2^F + 1 values; all three, and the core's
+memories (:func:`npstereo.hdl.plan_memories.memories`), are counted in ECP5 DP16KD blocks, each
 memory in the block shape that needs the fewest (16K x 1 .. 1K x 18). Memories of fewer
 than :data:`LUT_RAM_DEPTH` words go to LUT RAM and count no block. This is an estimate
 made before anything is built: the synthesis report (``yosys.log``) has Yosys' count.
@@ -47,8 +48,10 @@ def blocks(depth, width):
 
 
 def display_blocks(pixels, params):
-    """The pair's ROM and the frame buffer for ``pixels`` pixels."""
-    return blocks(pixels, 16) + blocks(pixels, params.disparity_bits + 1)
+    """The pair's ROM and the frame buffer for ``pixels`` pixels, and the colour ROM."""
+    colours = ((params.disparities - 1) << params.subpixel_bits) + 1
+    return (blocks(pixels, 16) + blocks(pixels, params.output_disparity_bits + 1)
+            + blocks(colours, 24))
 
 
 def core_blocks(params):

@@ -2,7 +2,10 @@
 the frame the golden model says the display receives.
 
 The map is scaled by the largest whole factor that fits the active area and centred; the
-rest of the screen is black. Colours are :func:`~npstereo.gen.images.colour_disparity`'s,
+rest of the screen is black. With F > 0 fractional bits (``--subpixel-bits``) the fraction
+is scaled into the colour: the table has an entry for every output value 0 ..
+(D - 1) 2^F, the colour of value / 2^F levels, so a whole level keeps the colour it has
+with F = 0. Colours are :func:`~npstereo.gen.images.colour_disparity`'s,
 the table the hardware holds (:func:`colour_table`), so the PNG a build writes is the frame
 the board sends, bit for bit (the board-top simulation compares the two).
 """
@@ -71,16 +74,19 @@ def placement(width, height, timing):
                      (timing.v_active - scale * height) // 2)
 
 
-def colour_table(disparities):
-    """The colour of every disparity 0 .. D-1 as (D, 3) uint8: the hardware's colour ROM."""
-    return colour_disparity(np.arange(disparities), disparities - 1)
+def colour_table(disparities, bits=0):
+    """The colour of every output value 0 .. (D-1) 2^F as ((D-1) 2^F + 1, 3) uint8 (with
+    F = 0 of every disparity 0 .. D-1): the hardware's colour ROM."""
+    top = (disparities - 1) << bits
+    return colour_disparity(np.arange(top + 1), top)
 
 
-def expected_frame(disparity, disparities, timing, colours=None):
+def expected_frame(disparity, disparities, timing, colours=None, bits=0):
     """The active picture (v_active, h_active, 3) uint8 the board shows for a map
-    (-1 invalid, black): ``colours`` (default :func:`colour_table`) indexed by the
-    disparity, each map pixel a ``scale`` x ``scale`` square, black around the map."""
-    colours = colour_table(disparities) if colours is None else np.asarray(colours)
+    (-1 invalid, black; with F = ``bits`` > 0 the output values, scaled by 2^F):
+    ``colours`` (default :func:`colour_table`) indexed by the value, each map pixel a
+    ``scale`` x ``scale`` square, black around the map."""
+    colours = colour_table(disparities, bits) if colours is None else np.asarray(colours)
     disparity = np.asarray(disparity)
     height, width = disparity.shape
     where = placement(width, height, timing)

@@ -73,7 +73,7 @@ def run(args):
 
     began = time.monotonic()
     golden = disparity_map(left, right, params).disparity
-    frame = expected_frame(golden, params.disparities, timing)
+    frame = expected_frame(golden, params.disparities, timing, bits=params.subpixel_bits)
     print(f"{board.name}: {params.describe()} on {name} ({width}x{height}), "
           f"about {blocks} of {board.blocks} DP16KD blocks; the core's configuration is "
           f"fixed in the bitstream (the buttons are not used)")
@@ -128,7 +128,7 @@ def add_arguments(parser):
     source.add_argument("--right", help="right image (with --left)")
     source.add_argument("--seed", type=int, default=0, help="synthetic scene seed (default 0)")
     add_matching_arguments(parser, max_block=MAX_BLOCK, max_disparities=MAX_DISPARITIES,
-                           defaults=BOARD_DEFAULTS)
+                           defaults=BOARD_DEFAULTS, subpixel=True)
     add_hardware_arguments(parser)
     parser.add_argument("--timeout", type=float, default=7200.0,
                         help="seconds for the whole flow before giving up (default 7200)")

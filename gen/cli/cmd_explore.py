@@ -16,7 +16,7 @@ from pathlib import Path
 from ...golden.data import load_middlebury
 from ...golden.synthetic import synthetic_pair
 from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES
-from ...params import LINE_BUFFERS, TRANSFORMS, UserError
+from ...params import LINE_BUFFERS, MAX_SUBPIXEL_BITS, TRANSFORMS, UserError
 from ..atomic import write_text
 from ..explore.engine import check_engine_arguments, cluster
 from ..explore.explorer import Grid, configurations, explore
@@ -44,6 +44,13 @@ def _aggregation(text):
         return text
 
 
+def _medians(values):
+    """The median axis: off without ``--median``, on with the bare flag, else as listed."""
+    if values is None:
+        return (False,)
+    return tuple(value == "on" for value in values) if values else (True,)
+
+
 def conditions(noise, bayer, seed):
     """Clean first, then noise and the Bayer stand-in where asked for."""
     chosen = [Condition(seed=seed)]
@@ -66,7 +73,10 @@ def _number(value, digits=0, suffix=""):
 
 
 def _quality_cells(point, labels):
-    return [_number(point["quality"][label].get("correct"), 2) for label in labels]
+    """Correct matches under each condition, and the clean mean error of the correct pixels
+    (what a sub-pixel fraction brings down; a result cached before it was measured: -)."""
+    return [_number(point["quality"][label].get("correct"), 2) for label in labels] + [
+        _number(point["quality"][labels[0]].get("mean_error"), 3)]
 
 
 def _device_table(dev):
@@ -97,9 +107,10 @@ def explore_markdown(document):
                "x >= D, invalid counted wrong. ◆ marks the Pareto front (no other point "
                "has more correct matches with less logic).", "",
              "| configuration | " + " | ".join(f"correct {label} (%)" for label in labels)
-             + f" | {unit} (%) | FF | memory bits | {ram} (%) | LUT levels | Fmax MHz "
-               "| frames/s | device | front |",
-             "|---|" + "---:|" * len(labels) + "---:|---:|---:|---:|---:|---:|---:|---|---|"]
+             + f" | mean error {labels[0]} (levels) | {unit} (%) | FF | memory bits "
+               f"| {ram} (%) | LUT levels | Fmax MHz | frames/s | device | front |",
+             "|---|" + "---:|" * (len(labels) + 1)
+             + "---:|---:|---:|---:|---:|---:|---:|---|---|"]
     for i, p in enumerate(document["points"]):
         use = p["utilisation"] or {}
         mark = "◆" if p["pareto"] else ""
@@ -139,11 +150,15 @@ def explore_markdown(document):
 def _short_labels(points):
     """Labels of only the axes that vary across the grid (transform and block always)."""
     params = [p["params"] for p in points]
-    varying = [key for key in ("rounds", "aggregation", "line_buffer")
-               if len({p[key] for p in params}) > 1]
-    short = {"rounds": "R", "aggregation": "A", "line_buffer": ""}
-    return [" ".join([p["transform"], str(p["block"])]
-                     + [f"{short[k]}{'=' if short[k] else ''}{p[k]}" for k in varying])
+    varying = [key for key in ("rounds", "aggregation", "line_buffer", "median",
+                               "subpixel_bits") if len({p[key] for p in params}) > 1]
+    short = {"rounds": "R", "aggregation": "A", "line_buffer": "", "subpixel_bits": "F"}
+
+    def value(p, key):
+        if key == "median":
+            return "median" if p[key] else "no median"
+        return f"{short[key]}{'=' if short[key] else ''}{p[key]}"
+    return [" ".join([p["transform"], str(p["block"])] + [value(p, k) for k in varying])
             for p in params]
 
 
@@ -188,7 +203,8 @@ def run(args):
                 line_buffers=tuple(args.line_buffer), disparities=args.disparities,
                 width=args.width, height=args.height,
                 lr_threshold=None if args.no_lr_check else args.lr_threshold,
-                lut_inputs=dev.lut_inputs)
+                lut_inputs=dev.lut_inputs, medians=_medians(args.median),
+                subpixel_bits=tuple(args.subpixel_bits))
     configs, skipped = configurations(grid)
     pair = (synthetic_pair(args.width, args.height, args.disparities, args.seed)
             if args.synthetic else load_middlebury(args.dataset))
@@ -248,6 +264,15 @@ def add_arguments(parser):
                         default=[STEREO_DEFAULTS["line_buffer"]],
                         help=f"rows above kept as transforms or costs "
                              f"(default {STEREO_DEFAULTS['line_buffer']})")
+    parser.add_argument("--median", nargs="*", choices=("off", "on"),
+                        help="the 3x3 median of the output (docs/semantics.md): --median "
+                             "alone puts it on every configuration, --median off on "
+                             "compares both (default off)")
+    parser.add_argument("--subpixel-bits", nargs="*", type=int, metavar="F",
+                        default=[STEREO_DEFAULTS["subpixel_bits"]],
+                        help=f"fractional bits F of the grid, 0 .. {MAX_SUBPIXEL_BITS}; "
+                             f"quality scores the fractional disparities "
+                             f"(default {STEREO_DEFAULTS['subpixel_bits']})")
     parser.add_argument("--disparities", type=int, default=STEREO_DEFAULTS["disparities"],
                         help=f"disparity range D, at most {MAX_DISPARITIES} "
                              f"(default {STEREO_DEFAULTS['disparities']})")

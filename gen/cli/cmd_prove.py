@@ -28,9 +28,6 @@ DEFAULTS = {"block": 3, "disparities": 2, "rounds": 1}
 def run(args):
     out = check_output_folder(args.out)
     base = params_from_args(args)
-    if base.median:
-        raise UserError("--median: the 3x3 median is not covered by npstereo prove yet "
-                        "(its properties are checked by simulation only)")
     width = base.first_valid_column + 1 if args.width is None else args.width
     params = base.with_size(width, args.height)
     check_buildable(params)
@@ -59,7 +56,7 @@ def run(args):
 
 def add_arguments(parser):
     add_matching_arguments(parser, max_block=MAX_PROVE_BLOCK,
-                           max_disparities=MAX_PROVE_DISPARITIES)
+                           max_disparities=MAX_PROVE_DISPARITIES, subpixel=True)
     add_hardware_arguments(parser)
     parser.set_defaults(**DEFAULTS)
     # The shared options' help names StereoParams' defaults: name prove's own instead.

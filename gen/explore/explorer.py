@@ -4,7 +4,9 @@ for one device, every evaluation a task on Dask distributed (:mod:`.engine`).
 For each configuration of the grid it measures
 
 - quality: correct matches of the golden model (bit-exact with the core) on the scene,
-  clean and under each degraded condition asked for (noise, the Bayer stand-in);
+  clean and under each degraded condition asked for (noise, the Bayer stand-in); with
+  F > 0 fractional bits the fractional disparities are scored, and the mean error of the
+  correct pixels shows what the fraction gives;
 - logic, registers, memory bits, block RAMs and the logic depth from synthesis for the
   device's target, and with place and route (ECP5 parts) nextpnr's Fmax;
 - frames per second at the hardware's frame size: Fmax (or the assumed clock without
@@ -31,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...golden.quality import evaluate as quality_of
+from ...golden.quality import evaluate as quality_of, mean_absolute_error
 from ...hdl.plan import check_buildable
 from ...hdl.plan_timing import cycles_per_frame
 from ...params import ParameterError, StereoParams, UserError
@@ -70,17 +72,21 @@ class Grid:
     #: The device's (:attr:`npstereo.gen.flow.capacity.Device.lut_inputs`), for every
     #: configuration.
     lut_inputs: int = 4
+    #: The output options' axes: the 3x3 median off and/or on, fractional bits F.
+    medians: tuple = (False,)
+    subpixel_bits: tuple = (0,)
 
     _AXES = (("transforms", "--transform"), ("blocks", "--block"), ("rounds", "--rounds"),
-             ("aggregations", "--aggregation"), ("line_buffers", "--line-buffer"))
+             ("aggregations", "--aggregation"), ("line_buffers", "--line-buffer"),
+             ("medians", "--median"), ("subpixel_bits", "--subpixel-bits"))
 
 
-def _params(grid, transform, block, rounds, aggregation, line_buffer):
+def _params(grid, transform, block, rounds, aggregation, line_buffer, median, bits):
     return StereoParams(transform=transform, block=block, disparities=grid.disparities,
                         rounds=rounds, aggregation=aggregation,
                         lr_threshold=grid.lr_threshold, width=grid.width,
                         height=grid.height, line_buffer=line_buffer,
-                        lut_inputs=grid.lut_inputs)
+                        lut_inputs=grid.lut_inputs, median=median, subpixel_bits=bits)
 
 
 def configurations(grid):
@@ -147,8 +153,10 @@ def quality_task(scene, params, cache, key):
     """On a worker: correct matches of ``params`` on one conditioned scene, ``(left,
     right, ground truth)``.
 
-    Returns the metrics of :func:`npstereo.golden.quality.evaluate` with ``seconds`` and
-    ``cached``; the result is stored in the shared ``cache`` when the worker can write
+    Returns the metrics of :func:`npstereo.golden.quality.evaluate` (of the fractional
+    disparities with F > 0), ``mean_error`` (:func:`~npstereo.golden.quality.
+    mean_absolute_error`, None when no pixel is correct), ``seconds`` and ``cached``; the
+    result is stored in the shared ``cache`` when the worker can write
     there (the client stores it too).
     """
     path = None if cache is None else _quality_path(cache, key)
@@ -159,7 +167,9 @@ def quality_task(scene, params, cache, key):
     left, right, truth = scene
     start = time.perf_counter()
     disparity = match_images(left, right, params, threads=1)
+    error = mean_absolute_error(disparity, truth, params.disparities)
     result = dict(quality_of(disparity, truth, params.disparities).as_dict(),
+                  mean_error=None if np.isnan(error) else round(error, 4),
                   seconds=round(time.perf_counter() - start, 3), cached=False)
     if path is not None:
         try:
@@ -328,8 +338,10 @@ def _point(params, index, scenes, plan, dev, pnr, clock):
 
 def _label(params):
     buffer = "" if params.line_buffer == "auto" else f" {params.line_buffer}"
+    options = (" median" if params.median else "") + (
+        f" F={params.subpixel_bits}" if params.subpixel_bits else "")
     return (f"{params.transform} {params.block}x{params.block} R={params.rounds} "
-            f"A={params.aggregation}{buffer}")
+            f"A={params.aggregation}{buffer}{options}")
 
 
 def _clean(point):

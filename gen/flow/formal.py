@@ -9,8 +9,8 @@ run in four groups, one ``.sby`` file each (one elaboration per group):
 - ``induction``: output held under backpressure, reset from any state; unbounded proofs
   with ABC's PDR (``abc pdr``, native ``yosys-abc`` from pyosys, no SMT solver), after a
   bounded check that finds a shallow counterexample quickly;
-- ``free``, ``framed``, ``misframed``: the frame markers, no output without input, whole
-  frames, recovery after misframing, as bounded model checks (``abc bmc3``) to ``depth``
+- ``free``, ``framed``, ``misframed``: the frame markers, no output without input, the
+  words' range (0 .. (D - 1) 2^F with F fractional bits), whole frames, recovery after misframing, as bounded model checks (``abc bmc3``) to ``depth``
   clocks. PDR did not close them in minutes even on the smallest cores (their invariants
   tie the harness's counters to the core's credits and queues), and the SAT problems
   harden steeply once words come out (census 3x3 D=2 R=1 at 3x2, whose first word comes
@@ -71,6 +71,8 @@ PROPERTIES = (
     Property("markers", "free", "tuser on each frame's first word, tlast on each line's last"),
     Property("no_spurious", "free", "no output without input: at most W x H words per "
                                      "start of frame"),
+    Property("word_range", "free", "a valid word's value <= (D-1) 2^F, an invalid "
+                                   "word's 0"),
     Property("frame_count", "framed", "well-framed input: never more words than beats"),
     Property("frame_whole", "framed", "well-framed input: exactly W x H words per frame"),
     Property("misframe_flag", "misframed", "framing_error only for a misframed beat"),
@@ -88,7 +90,8 @@ class Group:
 
 GROUPS = {
     "induction": Group("ENV_FREE", ("CHECK_HOLD", "CHECK_RESET"), "prove"),
-    "free": Group("ENV_FREE", ("CHECK_MARKERS", "CHECK_NO_SPURIOUS"), "bmc"),
+    "free": Group("ENV_FREE", ("CHECK_MARKERS", "CHECK_NO_SPURIOUS", "CHECK_WORD_RANGE"),
+                  "bmc"),
     "framed": Group("ENV_FRAMED", ("CHECK_FRAME",), "bmc"),
     "misframed": Group("ENV_MISFRAMED", ("CHECK_MISFRAME",), "bmc"),
 }
@@ -165,6 +168,7 @@ def _sby_text(core, params, group, mode, depth, timeout):
             f"read_verilog -formal {defines} {HARNESS.name}\n"
             f"chparam -set W {params.width} -set H {params.height} "
             f"-set DW {output_width(params)} -set QUIET {quiet} -set CW {width} "
+            f"-set VMAX {(params.disparities - 1) << params.subpixel_bits} "
             f"npstereo_formal\n"
             # Flattened here, so that the counterexample's witness names the signals the
             # trace conversion finds (Amaranth's module names contain dots).

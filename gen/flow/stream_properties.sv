@@ -15,6 +15,8 @@
 // at any clock, so every check also covers "reset from any state".
 module npstereo_formal #(
     parameter W = 8, parameter H = 4, parameter DW = 8,
+    // The largest output value, (D - 1) 2^F (F fractional bits).
+    parameter VMAX = 255,
     // Clocks without input, with the sink ready, after which every word must be out.
     parameter QUIET = 128, parameter CW = 10
 ) (input clk);
@@ -131,6 +133,13 @@ module npstereo_formal #(
         // tuser on each frame's first word, tlast on each line's last, whatever came in.
         if (m_tvalid)
             markers: assert (m_tuser == (ox == 0 && oy == 0) && m_tlast == (ox == W - 1));
+`endif
+`ifdef CHECK_WORD_RANGE
+        // A valid word's value lies in 0 .. (D - 1) 2^F (a sub-pixel fraction of a winner
+        // within half a level, none at the range's ends) and an invalid word's is 0, the
+        // bits between the value and the valid flag 0 in both.
+        if (m_tvalid)
+            word_range: assert (m_tdata[DW-1] ? m_tdata[DW-2:0] <= VMAX : m_tdata[DW-2:0] == 0);
 `endif
 `ifdef CHECK_NO_SPURIOUS
         // No output without input: at most W x H words per start of frame taken.
