@@ -64,19 +64,18 @@ def test_bounded_groups_on_census(tmp_path, capsys):
     assert [v.split("\t")[0] for v in verdicts] == [p.name for p in bounded]
 
 
-@pytest.mark.parametrize("extra", [
-    ["--median"],
-    # D = 5 and F = 5: the word grows to 16 bits (3 + 5 bits and the valid flag).
-    ["--disparities", "5", "--width", "6", "--subpixel-bits", "5"]])
-def test_unbounded_proofs_with_median_and_subpixel(extra, tmp_path, capsys):
+def test_unbounded_proofs_with_median_and_subpixel(tmp_path, capsys):
+    """One core with both (the test budget): the median, and D = 5 with F = 5, whose word
+    grows to 16 bits (3 + 5 bits and the valid flag)."""
     argv = _argv("census", tmp_path, "--aggregation", "1", "--no-lr-check", "--checks",
-                 "induction", "--depth", "4", *extra)
+                 "induction", "--depth", "4", "--median", "--disparities", "5", "--width",
+                 "6", "--subpixel-bits", "5")
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert re.search(r"^hold +proven \(unbounded, PDR\)", out, re.M), out
     assert re.search(r"^reset +proven \(unbounded, PDR\)", out, re.M), out
-    if "5" in extra:
-        assert "output [15:0] m_axis_tdata" in (tmp_path / "core.v").read_text()
+    assert " median 6x2 F=5" in out
+    assert "output [15:0] m_axis_tdata" in (tmp_path / "core.v").read_text()
 
 
 #: The median's smallest core; its first word leaves at clock 39 at the earliest.
