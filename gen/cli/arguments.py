@@ -115,6 +115,10 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
                             f"along the path from 2^T on, 1 <= T <= {SGM_MAX_ADAPT} "
                             f"(default {SGM_DEFAULT_ADAPT})")
     adapt.add_argument("--no-p2-adapt", action="store_true", help="a constant P2")
+    sgm.add_argument("--fifth-path", action="store_true",
+                     help="a fifth path, right to left along the row (the left path "
+                          "mirrored; golden model only: the hardware commands refuse it) "
+                          "(default off)")
 
 
 def add_lr_arguments(parser):
@@ -188,7 +192,8 @@ def _sgm_options(args):
     """The SGM options given on the command line, as the user spelled them."""
     given = [name for name, value in (("--p1", args.p1), ("--p2", args.p2),
                                       ("--p2-adapt", args.p2_adapt)) if value is not None]
-    return given + (["--no-p2-adapt"] if args.no_p2_adapt else [])
+    return (given + (["--no-p2-adapt"] if args.no_p2_adapt else [])
+            + (["--fifth-path"] if getattr(args, "fifth_path", False) else []))
 
 
 def aggregations_from_args(args, many=False):
@@ -229,7 +234,8 @@ def params_from_args(args, transform=None, block=None, aggregation=None):
         lut_inputs=getattr(args, "lut_inputs", STEREO_DEFAULTS["lut_inputs"]),
         p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
         p2_adapt=adapt if sgm else None, median=getattr(args, "median", False),
-        subpixel_bits=getattr(args, "subpixel_bits", STEREO_DEFAULTS["subpixel_bits"]))
+        subpixel_bits=getattr(args, "subpixel_bits", STEREO_DEFAULTS["subpixel_bits"]),
+        fifth_path=sgm and getattr(args, "fifth_path", False))
 
 
 def check_output_folder(value, option="--out"):
