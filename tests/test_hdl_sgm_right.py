@@ -1,0 +1,126 @@
+"""The fifth path's recursion in hardware (hdl/sgm_right.py) against the golden model.
+
+Rows are fed in mirrored column order, as the row buffer of docs/hardware.md ("The fifth
+path") would feed them, with bubbles, an earlier frame's positions first and the memories
+full of random words; every L_right of the frame must be golden/sgm.py's
+``right_path_costs``. The broken variants feed the row in raster order (the left path) and
+take P2 from the left neighbour, and must fail.
+"""
+
+import random
+
+import numpy as np
+import pytest
+from amaranth.sim import Simulator
+
+from npstereo.golden import sgm as golden_sgm
+from npstereo.hdl.sgm_right import RightPathRecursion
+from npstereo.params import StereoParams
+
+from test_hdl_sgm import random_memories, stage_slots
+
+
+def right_params(transform, block, disparities, rounds, p1, p2, adapt, width, height):
+    return StereoParams(transform=transform, block=block, disparities=disparities,
+                        rounds=rounds, aggregation="sgm", p1=p1, p2=p2, p2_adapt=adapt,
+                        width=width, height=height)
+
+
+def check_right(params, monkeypatch, seed, bubbles=0.3, mirrored=True, p2_of=None):
+    """Stream a random volume through the recursion, row by row right to left (or, with
+    ``mirrored`` false, left to right); compare with the golden fifth path."""
+    rng, stream = np.random.default_rng(seed), random.Random(seed)
+    width, height, rounds, units = params.width, params.height, params.rounds, \
+        params.per_round
+    top = params.max_cost
+    volume = rng.integers(0, top + 1, (height, width, params.disparities))
+    volume[::3, ::2] = top
+    volume[1::4, :, :2] = 0
+    guide = rng.integers(0, 256, (height, width)).astype(np.uint8)
+    adapt = params.p2_adapt or None
+    expected = golden_sgm.right_path_costs(volume, params.p1, params.p2, guide, adapt, top)
+    penalties = (p2_of or golden_sgm.right_path_p2)(guide, params.p1, params.p2, adapt)
+
+    def column(x):
+        return width - 1 - x if mirrored else x
+
+    slots = stage_slots(width, height, stream, bubbles)
+    clocks = [(slot, j) for slot in slots for j in range(rounds)]
+    # The left path's stores are LUT RAM from R = 2 on (registers at R = 1).
+    fill = random_memories(monkeypatch, seed) if rounds > 1 else (lambda ctx: None)
+    dut = RightPathRecursion(params)
+    latency, got = dut.latency, {}
+
+    async def testbench(ctx):
+        fill(ctx)
+        for t in range(len(clocks) + latency):
+            slot, j = clocks[t] if t < len(clocks) else (None, t % rounds)
+            ctx.set(dut.first, j == 0)
+            ctx.set(dut.round, j)
+            if slot is None or slot[0] != "frame":
+                x, y = (stream.randrange(width), 0) if slot is None else slot[1:]
+                ctx.set(dut.tag, {"x": x, "y": y, "valid": slot is not None, "live": 1})
+                for i in range(units):
+                    ctx.set(dut.costs[i], stream.randrange(top + 1))
+                ctx.set(dut.p2, stream.randrange(params.p2 + 1))
+            else:
+                _, x, y = slot
+                ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
+                for i in range(units):
+                    ctx.set(dut.costs[i], int(volume[y, column(x), j * units + i]))
+                ctx.set(dut.p2, int(penalties[y, column(x)]))
+            if t >= latency and clocks[t - latency][0] is not None \
+                    and clocks[t - latency][0][0] == "frame":
+                (_, x, y), j = clocks[t - latency]
+                centre = ctx.get(dut.centre)
+                assert (centre.x, centre.y, centre.valid) == (x, y, 1)
+                for i in range(units):
+                    got[(y, column(x), j * units + i)] = ctx.get(dut.lanes[i])
+            await ctx.tick()
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()
+    assert len(got) == expected.size, "not every value was compared"
+    mismatches = [(key, value, int(expected[key])) for key, value in sorted(got.items())
+                  if value != expected[key]]
+    assert not mismatches, (f"{len(mismatches)} values differ, first ((y, x, d), got, "
+                            f"expected): {mismatches[0]}")
+
+
+CASES = [
+    # transform, block, D, R, P1, P2, t, width, height
+    ("census", 3, 4, 1, 3, 20, 2, 22, 2),            # R = 1: one position per clock
+    ("census", 5, 8, 1, 16, 96, 4, 20, 2),           # R = 1, eight lanes, W > K
+    ("rank", 5, 15, 3, 7, 40, 5, 19, 2),             # R = 3: the two-clock update
+    ("census", 3, 8, 4, 3, 20, None, 18, 2),         # R = 4, several rounds, constant P2
+]
+
+
+@pytest.mark.parametrize("transform,block,disparities,rounds,p1,p2,adapt,width,height",
+                         CASES)
+def test_right_recursion_matches_golden(monkeypatch, transform, block, disparities, rounds,
+                                        p1, p2, adapt, width, height):
+    params = right_params(transform, block, disparities, rounds, p1, p2, adapt or 0,
+                          width, height)
+    check_right(params, monkeypatch, seed=disparities + rounds)
+
+
+BROKEN = right_params("census", 3, 4, 1, 3, 20, 2, 22, 2)
+
+
+def test_broken_baseline_matches(monkeypatch):
+    check_right(BROKEN, monkeypatch, seed=3)
+
+
+def test_broken_raster_order_is_caught(monkeypatch):
+    # The row fed left to right: the left path, not the fifth.
+    with pytest.raises(AssertionError, match="values differ"):
+        check_right(BROKEN, monkeypatch, seed=3, mirrored=False)
+
+
+def test_broken_p2_from_the_left_neighbour_is_caught(monkeypatch):
+    with pytest.raises(AssertionError, match="values differ"):
+        check_right(BROKEN, monkeypatch, seed=3, p2_of=lambda guide, p1, p2, adapt:
+                    golden_sgm.path_p2(guide, "left", p1, p2, adapt))
