@@ -53,9 +53,6 @@ def check_buildable(params):
     anything is built so that an oversized request fails at once instead of elaborating
     for minutes. Semi-global aggregation takes any number of rounds that divides D.
     """
-    if params.fifth_path:
-        raise ParameterError("fifth path: the right-to-left SGM path is in the golden model "
-                             "only (npstereo match, eval); the hardware does not build it yet")
     if params.width is None or params.height is None:
         raise ParameterError("the hardware needs the image size: give width and height "
                              "(--width and --height)")

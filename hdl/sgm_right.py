@@ -23,7 +23,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
 from .banks import line_memory
-from .common import SlotClock, bits_for, register, tag_layout, taps
+from .common import SlotClock, bits_for, register, tag_layout, taps, y_range
 from .plan_timing import sgm_fifth_timing, sgm_timing
 from .sgm_left import PathOwner, left_path
 
@@ -147,7 +147,10 @@ def fifth_path(owner, m, four, p2_left):
     starts = slots.first(0) & tag.valid & (tag.x == 0)
     mirror = Signal(name="sgm_fifth_mirror")
     mirrored = _direction(mirror, starts)
-    rows = [Signal(tag.y.shape(), name=f"sgm_fifth_row{k}") for k in range(3)]
+    # Reset to a row above every frame: before two rows have passed, no sum is of a
+    # frame row.
+    rows = [Signal(tag.y.shape(), name=f"sgm_fifth_row{k}", init=y_range(p)[0])
+            for k in range(3)]
     with m.If(starts):
         m.d.sync += [mirror.eq(mirrored), rows[2].eq(rows[1]), rows[1].eq(rows[0]),
                      rows[0].eq(tag.y)]

@@ -16,10 +16,14 @@ from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
-from npstereo.hdl import sgm_right
+from npstereo.golden.pipeline import disparity_map
+from npstereo.hdl import plan_timing, sgm_right
 from npstereo.hdl.sgm_right import RightPathRecursion
 from npstereo.params import StereoParams
 
+from hdl_helpers import RESET, check_frames, frame_beats
+from scenes import stereo_pair
+from test_hdl_plan import measured_flush, measured_period, planned_flush
 from test_hdl_sgm import random_memories, stage_slots
 
 
@@ -226,3 +230,59 @@ def test_broken_fixed_direction_is_caught(monkeypatch):
     monkeypatch.setattr(sgm_right, "_direction", lambda mirror, starts: Const(0))
     with pytest.raises(AssertionError, match="sums differ"):
         check_stage_fifth(FIFTH_BROKEN, monkeypatch, seed=5)
+
+
+# The core with the fifth path --------------------------------------------------------------
+
+#: transform, block, D, R, P1, P2, t, L/R threshold, image, width, height
+CORES = [
+    ("census", 3, 4, 1, 3, 20, 2, 1, "layers", 22, 5),             # R = 1
+    ("census", 3, 8, 8, 3, 20, 2, 3, "independent", 14, 5),        # R = 8, several rounds
+    ("rank", 3, 6, 3, 8, 30, 0, None, "independent", 18, 4),       # R = 3, no check
+]
+
+
+def fifth_core(transform, block, disparities, rounds, p1, p2, adapt, lr, width, height):
+    return right_params(transform, block, disparities, rounds, p1, p2, adapt, width,
+                        height).replace(lr_threshold=lr, fifth_path=True)
+
+
+@pytest.mark.parametrize("transform,block,disparities,rounds,p1,p2,adapt,lr,image,width,"
+                         "height", CORES)
+def test_core_with_the_fifth_path_matches_golden(transform, block, disparities, rounds, p1,
+                                                 p2, adapt, lr, image, width, height):
+    params = fifth_core(transform, block, disparities, rounds, p1, p2, adapt, lr, width,
+                        height)
+    pair = stereo_pair(image, height, width, block * 100 + disparities, disparities)
+    check_frames(params, [pair], frame_beats(*pair), valid_prob=0.7, ready_prob=0.7,
+                 seed=rounds)
+    # Counterpart: the four paths' map differs, so the comparison sees the fifth path.
+    assert not np.array_equal(disparity_map(*pair, params).disparity,
+                              disparity_map(*pair, params.replace(fifth_path=False)).disparity)
+
+
+def test_core_with_the_fifth_path_reset_misframing_and_frames_back_to_back():
+    """A reset in mid-frame, a misframed frame, then two frames back to back (the first's
+    last two rows leave while the second's first rows come in): both bit-exact."""
+    params = fifth_core("census", 3, 8, 8, 3, 20, 2, 3, 14, 5)
+    first, second = stereo_pair("layers", 5, 14, 7), stereo_pair("independent", 5, 14, 8)
+    misframed = frame_beats(*second)
+    data, user, _ = misframed[14 + 5]
+    misframed[14 + 5] = (data, user, True)
+    beats = frame_beats(*first)[:30] + [RESET] + misframed + frame_beats(*first) \
+        + frame_beats(*second)
+    result = check_frames(params, [first, second], beats, valid_prob=0.7, ready_prob=0.7,
+                          seed=3)
+    assert result["errors"] >= 1
+
+
+@pytest.mark.parametrize("rounds", [1, 4])
+def test_fifth_path_flush_and_period_are_measured(rounds):
+    """The flush is two rows longer (``plan_timing.latency``), frames back to back still
+    take W H R clocks; the formula without the two rows fails the same check."""
+    params = fifth_core("census", 3, 8, rounds, 3, 20, 2, 2, 24, 6)
+    flush, output = measured_flush(params)
+    assert flush == planned_flush(params, output)
+    assert measured_period(params) == plan_timing.cycles_per_frame(params)
+    four = plan_timing.latency(params.replace(fifth_path=False))
+    assert flush != four * params.rounds + output
