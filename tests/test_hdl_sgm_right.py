@@ -286,3 +286,24 @@ def test_fifth_path_flush_and_period_are_measured(rounds):
     assert measured_period(params) == plan_timing.cycles_per_frame(params)
     four = plan_timing.latency(params.replace(fifth_path=False))
     assert flush != four * params.rounds + output
+
+
+def test_icarus_stream_with_the_fifth_path():
+    """The generated Verilog under cocotb on Icarus with test_cocotb's full plan (frames
+    back to back under idle cycles and backpressure, a reset, misframed lines, an aborted
+    frame): every good frame bit-exact; the core without the row seam's forwarding is
+    reported mismatching."""
+    from npstereo.hdl.verilog import core_verilog
+    from npstereo.sim import cosim
+    from test_cocotb import FULL_PLAN, assert_bit_exact, config, frames
+
+    params = config("census", 3, 4, 1, 1).replace(aggregation="sgm", p1=3, p2=20,
+                                                   p2_adapt=2, fifth_path=True)
+    pairs = frames(params)
+    assert_bit_exact(cosim.run_stream("icarus", params, pairs, FULL_PLAN))
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(sgm_right, "_forwarded",
+                      lambda m, name, address, written, enable, data, read_data: read_data)
+        broken = core_verilog(params)
+    result = cosim.run_stream("icarus", params, pairs, FULL_PLAN[:1], core_text=broken)
+    assert result.frames and not result.ok
