@@ -101,7 +101,7 @@ class StereoParams:
     fifth_path : bool
         SGM only: a fifth path, right to left along the row (the left path mirrored,
         docs/semantics.md "The fifth path"), summed with the four raster-order paths; off
-        by default. The golden model computes it; the hardware does not build it yet.
+        by default.
     """
 
     transform: str = "census"

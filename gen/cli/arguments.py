@@ -117,7 +117,7 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
     adapt.add_argument("--no-p2-adapt", action="store_true", help="a constant P2")
     sgm.add_argument("--fifth-path", action="store_true",
                      help="a fifth path, right to left along the row (the left path "
-                          "mirrored; golden model only: the hardware commands refuse it) "
+                          "mirrored; the hardware's sums then trail by two rows) "
                           "(default off)")
 
 

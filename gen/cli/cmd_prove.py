@@ -31,6 +31,9 @@ def run(args):
     if base.median:
         raise UserError("--median: the 3x3 median is not covered by npstereo prove yet "
                         "(its properties are checked by simulation only)")
+    if base.fifth_path:
+        raise UserError("--fifth-path: the fifth SGM path is not covered by npstereo prove "
+                        "yet (its properties are checked by simulation only)")
     width = base.first_valid_column + 1 if args.width is None else args.width
     params = base.with_size(width, args.height)
     check_buildable(params)
