@@ -90,7 +90,9 @@ def sgm_memories(params):
     another (it reads the next column); the three paths' minima, one word per column.
     LUT RAM (R > 1; registers at R = 1): the left path's Lu(x - 1, .) (D/R values of
     ``left_loop_bits`` per round) and the first of them again (the neighbour across the next
-    round's edge), and the top-left words held for the next position.
+    round's edge), and the top-left words held for the next position. With the fifth path
+    (:mod:`.sgm_right`) its recursion's two stores again, and three rows of W R words in
+    block RAM: the costs (and P2), S4 and S5.
     """
     p = params
     word = p.per_round * p.path_cost_bits
