@@ -276,7 +276,7 @@ def test_core_with_the_fifth_path_reset_misframing_and_frames_back_to_back():
     assert result["errors"] >= 1
 
 
-@pytest.mark.parametrize("rounds", [1, 4])
+@pytest.mark.parametrize("rounds", [1])
 def test_fifth_path_flush_and_period_are_measured(rounds):
     """The flush is two rows longer (``plan_timing.latency``), frames back to back still
     take W H R clocks; the formula without the two rows fails the same check."""
