@@ -5,7 +5,9 @@ any transform are aggregated along the paths a raster-order stream can compute
 (``params.SGM_PATHS``: left, top-left, top, top-right) with integer penalties P1, P2
 (optionally P2 adapted to the intensity step along the path), normalised by the previous
 pixel's minimum, and summed; the left path takes its large step from the tracked reference
-of the disparity best K positions back (``params.SGM_TRACK_AGE``, ``SGM_TRACK_STEPS``). The summed costs S then go through the same WTA and
+of the disparity best K positions back (``params.SGM_TRACK_AGE``, ``SGM_TRACK_STEPS``).
+Optionally (``StereoParams.fifth_path``) a fifth path, right to left along the row, is the
+left path's code run on the mirrored row. The summed costs S then go through the same WTA and
 right-referenced map as the box pipeline. docs/semantics.md ("Semi-global aggregation") is
 the exact contract; every function here computes it bit for bit with integer numpy
 arithmetic (no floats anywhere). The paths, the rules of the parameters (P1, P2, t), the
@@ -33,7 +35,8 @@ from .matching_cost import cost_dtype, matching_costs, pixel_sums
 from .subpixel import fit_volume, with_fraction
 from .transform import transform
 
-__all__ = ["cost_volume", "path_p2", "path_costs", "aggregate", "winners",
+__all__ = ["cost_volume", "path_p2", "path_costs", "right_path_p2", "right_path_costs",
+           "aggregate", "winners",
            "disparity_from_summed", "disparity_map"]
 
 #: Elements of one band's cost volume in :func:`disparity_map` (rows x W x D): 4 Mi, a few
@@ -41,16 +44,23 @@ __all__ = ["cost_volume", "path_p2", "path_costs", "aggregate", "winners",
 #: path's loop over x still handles many rows per numpy call.
 _BAND_ELEMENTS = 1 << 22
 
+#: The fifth path's key among :func:`disparity_map`'s paths (not one of
+#: ``params.SGM_PATHS``: a raster-order stream cannot compute it as those).
+_FIFTH = "right"
 
-def _dtype(max_cost, p2):
+
+def _dtype(max_cost, p2, fifth_path=False):
     """The narrowest unsigned dtype holding every intermediate and S with room to spare.
 
     Room to spare: the right-referenced map pads with the dtype's maximum, which must be
-    larger than every real S. S <= (K Cmax + P2) + 3 (Cmax + P2) (docs/semantics.md,
-    "Widths"); the unnormalised left path has a dtype of its own (:func:`_left_band`).
+    larger than every real S. S <= (K Cmax + P2) + 3 (Cmax + P2), one more K Cmax + P2
+    with the fifth path (docs/semantics.md, "Widths"); the unnormalised left path has a
+    dtype of its own (:func:`_left_band`).
     """
+    along = 2 if fifth_path else 1
     largest = max(max_cost + 2 * p2,
-                  SGM_TRACK_AGE * max_cost + p2 + len(SGM_ROW_PATHS) * (max_cost + p2)) + 1
+                  along * (SGM_TRACK_AGE * max_cost + p2)
+                  + len(SGM_ROW_PATHS) * (max_cost + p2)) + 1
     return _fitting(largest)
 
 
@@ -256,6 +266,36 @@ def _left_band(costs, p1, p2_map, out):
     return out
 
 
+def right_path_p2(guide, p1, p2, adapt=None):
+    """P2 of the fifth path (right to left along the row) as (H, W) int64: the left path's
+    rule on |I(x) - I(x + 1)|, i.e. the left path's P2 of the mirrored image, mirrored."""
+    mirrored = np.asarray(guide)[:, ::-1]
+    return path_p2(mirrored, "left", p1, p2, adapt)[:, ::-1]
+
+
+def right_path_costs(volume, p1, p2, guide=None, adapt=None, max_cost=None):
+    """L of the fifth path over the whole image: (H, W, D) like :func:`path_costs`.
+
+    docs/semantics.md, "The fifth path": the left path (tracked reference and all) run on
+    every row mirrored, x' = W - 1 - x, with P2 from :func:`right_path_p2`; so the
+    predecessor of (x, y) is (x + 1, y) and the row's last column starts fresh. Parameters
+    as :func:`path_costs`.
+    """
+    volume = np.asarray(volume)
+    mirrored = volume[:, ::-1] if volume.ndim == 3 else volume
+    flipped_guide = None if guide is None else np.asarray(guide)[:, ::-1]
+    # path_costs checks every argument, and its left path is the one computation of the
+    # recurrence; the mirrored P2 it builds from the mirrored guide is right_path_p2's.
+    return path_costs(mirrored, "left", p1, p2, flipped_guide, adapt, max_cost)[:, ::-1]
+
+
+def _right_band(costs, p1, p2_right, out):
+    """The fifth path over a band of rows: the left path of the mirrored rows (``p2_right``
+    in image order, from :func:`right_path_p2`), written into ``out`` in image order."""
+    _left_band(costs[:, ::-1], p1, p2_right[:, ::-1], out[:, ::-1])
+    return out
+
+
 def _tracked_reference(path, costs, best, x, index):
     """ref(x) of the left path for every row of a band: (rows,).
 
@@ -295,8 +335,9 @@ def _row_band(costs, dx, p1, p2_map, previous, out):
 
 
 def aggregate(volume, p1, p2, paths=SGM_PATHS, guide=None, adapt=None, max_cost=None,
-              threads=None):
-    """S(p, d): the sum of L_r over ``paths``. (H, W, D) unsigned.
+              threads=None, fifth_path=False):
+    """S(p, d): the sum of L_r over ``paths``, and of the fifth path's L with
+    ``fifth_path``. (H, W, D) unsigned.
 
     Parameters are those of :func:`path_costs`; ``threads`` computes paths in parallel
     (numpy releases the GIL; the sum does not depend on it).
@@ -310,7 +351,9 @@ def aggregate(volume, p1, p2, paths=SGM_PATHS, guide=None, adapt=None, max_cost=
     with ThreadPoolExecutor(max_workers=workers) as pool:
         parts = list(pool.map(lambda path: path_costs(volume, path, p1, p2, guide, adapt,
                                                       max_cost), paths))
-    summed = parts[0].copy()
+        if fifth_path:
+            parts.append(right_path_costs(volume, p1, p2, guide, adapt, max_cost))
+    summed = parts[0].astype(_dtype(max_cost, p2, fifth_path))
     for part in parts[1:]:
         summed += part
     return summed
@@ -359,7 +402,8 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
     left, right : (H, W) uint8
         Rectified gray images; the left one is the reference.
     params : StereoParams
-        transform, block, disparities and lr_threshold are used. ``aggregation`` and the
+        transform, block, disparities, lr_threshold, subpixel_bits and fifth_path are
+        used. ``aggregation`` and the
         parameters' own penalties are not: they are the arguments below, so that tests and
         sweeps can vary them on any configuration (``golden.pipeline.disparity_map`` passes
         an SGM configuration's own). ``rounds`` does not change the result (ties go to the
@@ -386,9 +430,12 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
     check_sgm_paths(paths)
     paths = tuple(paths)
     height, width = left.shape
-    dtype = _dtype(params.max_cost, p2)
+    dtype = _dtype(params.max_cost, p2, params.fifth_path)
     left_t, right_t = _transforms(left, right, params, threads)
     p2_maps = {path: path_p2(left, path, p1, p2, adapt).astype(dtype) for path in paths}
+    if params.fifth_path:
+        p2_maps[_FIFTH] = right_path_p2(left, p1, p2, adapt).astype(dtype)
+        paths += (_FIFTH,)
     p1 = dtype(p1)
     # Bands of rows bound the memory (a few band volumes instead of several image volumes);
     # the paths from above carry their last row from one band into the next, the left
@@ -406,6 +453,8 @@ def disparity_map(left, right, params, p1, p2, paths=SGM_PATHS, adapt=None, thre
 
             def one_path(path):
                 out = np.empty_like(costs)
+                if path == _FIFTH:
+                    return _right_band(costs, p1, p2_maps[path][y0:y1], out)
                 if path not in SGM_ROW_PATHS:
                     return _left_band(costs, p1, p2_maps[path][y0:y1], out)
                 return _row_band(costs, SGM_PATH_STEPS[path][0], p1, p2_maps[path][y0:y1],

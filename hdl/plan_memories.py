@@ -6,6 +6,7 @@ compares their bits with what Yosys infers (``tests/test_report.py``).
 
 from dataclasses import dataclass
 
+from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
 from .common import tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, store_slices,
@@ -91,7 +92,9 @@ def sgm_memories(params):
     another (it reads the next column); the three paths' minima, one word per column.
     LUT RAM (R > 1; registers at R = 1): the left path's Lu(x - 1, .) (D/R values of
     ``left_loop_bits`` per round) and the first of them again (the neighbour across the next
-    round's edge), and the top-left words held for the next position.
+    round's edge), and the top-left words held for the next position. With the fifth path
+    (:mod:`.sgm_right`) its recursion's two stores again, and three rows of W R words in
+    block RAM: the costs (and P2), S4 and S5.
     """
     p = params
     word = p.per_round * p.path_cost_bits
@@ -99,7 +102,22 @@ def sgm_memories(params):
               MemoryUse("path rows (top-right)", 1, p.width * p.rounds, word),
               MemoryUse("path minima", 1, p.width, 3 * p.path_cost_bits)]
     if p.rounds > 1:
-        result += [MemoryUse("left path store", 1, p.rounds, p.per_round * p.left_loop_bits),
-                   MemoryUse("left path first lanes", 1, p.rounds, p.left_loop_bits),
+        # The fifth path's recursion has the left path's stores again.
+        copies = 2 if p.fifth_path else 1
+        result += [MemoryUse("left path store", copies, p.rounds,
+                             p.per_round * p.left_loop_bits),
+                   MemoryUse("left path first lanes", copies, p.rounds, p.left_loop_bits),
                    MemoryUse("top-left store", 1, p.rounds, word)]
+    if p.fifth_path:
+        # hdl/sgm_right.py: a row of the costs (and the left path's P2 when adaptive), of
+        # S4 and of S5, one word per (column, round).
+        adaptive = p.p2_adapt != P2_ADAPT_OFF
+        p2_bits = max(1, p.p2.bit_length()) if adaptive else 0
+        depth = p.width * p.rounds
+        result += [MemoryUse("fifth path costs row", 1, depth,
+                             p.per_round * p.cost_bits + p2_bits),
+                   MemoryUse("fifth path S4 row", 1, depth,
+                             p.per_round * sgm_summed_cost_bits(p.max_cost, p.p2)),
+                   MemoryUse("fifth path S5 row", 1, depth,
+                             p.per_round * p.aggregated_cost_bits)]
     return result

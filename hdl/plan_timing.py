@@ -23,7 +23,7 @@ __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
            "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages",
            "sgm_left_read_registered", "sgm_tree_clocks", "SgmTiming",
-           "sgm_timing", "evaluation_latency",
+           "sgm_timing", "FifthTiming", "sgm_fifth_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
 
@@ -88,7 +88,8 @@ def aggregation_latency(params, every=DEFAULT_EVERY):
     top, see :func:`calculation_timing`.)
     """
     if params.is_sgm:
-        return sgm_timing(params, every).latency
+        timing = sgm_fifth_timing if params.fifth_path else sgm_timing
+        return timing(params, every).latency
     if not params.agg_radius:
         return 0
     return vertical_clocks(params, every) + 1 + sum(horizontal_plan(params, every))
@@ -299,6 +300,25 @@ def sgm_timing(params, every=DEFAULT_EVERY):
                      sum_clocks, picks, left, rows, rows + tree + rounds, summed)
 
 
+@dataclass(frozen=True)
+class FifthTiming:
+    """Offsets of the fifth path (:mod:`.sgm_right`) after the SGM stage's input; each
+    row buffer is read at its offset and written a clock later."""
+    costs: int          #: the costs row (C and the left path's P2) is read
+    four: int           #: the four paths' sum S4 (its row is read a clock before)
+    right: int          #: L_right of the previous row, mirrored (the recursion's output)
+    latency: int        #: S5 of the row before that, in raster order (its row's read data)
+
+
+def sgm_fifth_timing(params, every=DEFAULT_EVERY):
+    """The fifth path's offsets: the costs row read as late as lets the recursion (the left
+    path's ``left`` clocks) end where S4 is there, or later, S5 registered after both."""
+    t = sgm_timing(params, every)
+    costs = max(t.guide, t.latency - t.left - 1)
+    right = costs + 1 + t.left
+    return FifthTiming(costs, t.latency, right, right + 1)
+
+
 # Evaluation, L/R check, the whole core ----------------------------------------------------
 
 def evaluation_latency(params):
@@ -399,6 +419,8 @@ def latency(params):
     """
     p = params
     lag = (p.radius + p.agg_radius) * (p.width + 1)
+    # The fifth path gives a row's sums while the row after the next streams in.
+    lag += 2 * p.width if p.fifth_path else 0
     return lag + (p.disparities if p.lr_check else 0) + (p.width + 1 if p.median else 0)
 
 

@@ -44,8 +44,9 @@ from .banks import banked_memory, line_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, \
     tag_layout, taps
 from .plan_structure import row_banks
-from .plan_timing import SGM_ROW_CLOCKS, sgm_timing
-from .sgm_left import left_path
+from .plan_timing import SGM_ROW_CLOCKS, sgm_fifth_timing, sgm_timing
+from .sgm_left import PathOwner, left_path
+from .sgm_right import fifth_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
 
 __all__ = ["GUIDE", "guide_pixels", "SemiGlobalAggregation"]
@@ -113,7 +114,7 @@ def _lanes(word, count, bits):
     return [word[i * bits:(i + 1) * bits] for i in range(count)]
 
 
-class SemiGlobalAggregation(wiring.Component):
+class SemiGlobalAggregation(PathOwner, wiring.Component):
     """Summed path costs S of the round's D/R disparities, for the position of the tag.
 
     Parameters
@@ -151,7 +152,8 @@ class SemiGlobalAggregation(wiring.Component):
     def __init__(self, params, every=DEFAULT_EVERY):
         self.params, self.every = params, every
         self.timing = sgm_timing(params, every)
-        self.latency = self.timing.latency
+        self.latency = (sgm_fifth_timing(params, every) if params.fifth_path
+                        else self.timing).latency
         units = params.per_round
         super().__init__({
             "costs": In(data.ArrayLayout(unsigned(params.cost_bits), units)),
@@ -172,7 +174,9 @@ class SemiGlobalAggregation(wiring.Component):
         #: The round's costs C, k clocks late at index k.
         self._costs = [_lanes(word, units, p.cost_bits) for word in
                        taps(m, costs, max(t.rows - 1, t.loop + t.left_stages - 1,
-                                           t.left_picks[-2] + 1), "sgm_cost")]
+                                           t.left_picks[-2] + 1,
+                                           sgm_fifth_timing(p, self.every).costs + 1
+                                           if p.fifth_path else 0), "sgm_cost")]
         # Fresh starts of the position, slot-aligned with P2 (two registers after the tag).
         fresh = {}
         for path in SGM_PATHS:
@@ -197,24 +201,16 @@ class SemiGlobalAggregation(wiring.Component):
         left = _lanes(taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
                       units, p.left_cost_bits)
         plan = register_plan(2, self.every, 0, True)
-        for i in range(units):
-            total = build_sum(m, 1, [left[i], above[i]], plan)
+        totals = [build_sum(m, 1, [left[i], above[i]], plan) for i in range(units)]
+        if p.fifth_path:
+            totals, (x, y, valid, live) = fifth_path(self, m, totals, p2["left"])
+            m.d.comb += [self.centre.x.eq(x), self.centre.y.eq(y),
+                         self.centre.valid.eq(valid), self.centre.live.eq(live)]
+        else:
+            m.d.comb += self.centre.eq(slots.delay(self.tag, 0, self.latency, "sgm_centre"))
+        for i, total in enumerate(totals):
             m.d.comb += self.sums[i].eq(total[:p.aggregated_cost_bits])
-        m.d.comb += self.centre.eq(slots.delay(self.tag, 0, self.latency, "sgm_centre"))
         return m
-
-    def _valid_at(self, offset):
-        """The tag's ``valid`` slot-aligned at ``offset``: the write enable of every state."""
-        if offset not in self._valid:
-            self._valid[offset] = self._slots.delay(self.tag.valid, 0, offset,
-                                                    f"sgm_valid{offset}")
-        return self._valid[offset]
-
-    def _aligned(self, value, start, offset, name):
-        """A slot-aligned ``value`` moved from ``start`` to ``offset`` (constants stay)."""
-        if isinstance(value, Const):
-            return value
-        return self._slots.delay(value, start, offset - start, name)
 
     def _penalties(self, m):
         """P2 of each path at the position, slot-aligned at ``timing.guide`` (constants

@@ -45,7 +45,27 @@ from .common import Store, bits_for, register, replica, taps
 from .plan_timing import sgm_left_read_registered
 from .trees import build_tree, register_plan
 
-__all__ = ["left_path"]
+__all__ = ["PathOwner", "left_path"]
+
+
+class PathOwner:
+    """What :func:`left_path` asks its owner for besides ``params``, ``timing``, ``tag``,
+    ``_slots`` (its slot clock) and ``_costs`` (the costs' taps): the tag's valid flag and
+    slot-aligned delays. The SGM stage and the fifth path's recursion (:mod:`.sgm_right`)
+    are owners; each sets ``_valid = {}`` when it elaborates."""
+
+    def _valid_at(self, offset):
+        """The tag's ``valid`` slot-aligned at ``offset``: the write enable of every state."""
+        if offset not in self._valid:
+            self._valid[offset] = self._slots.delay(self.tag.valid, 0, offset,
+                                                    f"{self._slots.name}_valid{offset}")
+        return self._valid[offset]
+
+    def _aligned(self, value, start, offset, name):
+        """A slot-aligned ``value`` moved from ``start`` to ``offset`` (constants stay)."""
+        if isinstance(value, Const):
+            return value
+        return self._slots.delay(value, start, offset - start, name)
 
 
 def _less(a, b, bits):

@@ -104,6 +104,10 @@ class StereoParams:
         A term of :data:`COST_TERMS` added to the matching cost (census with SGM only;
         docs/semantics.md "The ad3 cost term"); it raises Cmax and, when P2 is not given,
         makes the default P2 :func:`default_p2`'s. ``None`` (default): the transform's cost.
+    fifth_path : bool
+        SGM only: a fifth path, right to left along the row (the left path mirrored,
+        docs/semantics.md "The fifth path"), summed with the four raster-order paths; off
+        by default.
     """
 
     transform: str = "census"
@@ -122,13 +126,14 @@ class StereoParams:
     median: bool = False
     subpixel_bits: int = 0
     cost_term: str | None = None
+    fifth_path: bool = False
 
     def __repr__(self):
-        # The dataclass's form, without subpixel_bits while it is 0 and cost_term while it
-        # is None: repr() is the report cache's key, and every configuration without them
-        # keeps its key.
+        # The dataclass's form, without subpixel_bits while it is 0, cost_term while it
+        # is None and fifth_path while it is off: repr() is the report cache's key, and
+        # every configuration without them keeps its key.
         shown = [f for f in fields(self) if getattr(self, f.name) or f.name not in
-                 ("subpixel_bits", "cost_term")]
+                 ("subpixel_bits", "cost_term", "fifth_path")]
         return (f"{type(self).__qualname__}("
                 + ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown) + ")")
 
@@ -185,6 +190,11 @@ class StereoParams:
                 or not 0 <= self.subpixel_bits <= MAX_SUBPIXEL_BITS):
             raise ParameterError(f"subpixel bits must be an integer 0 .. {MAX_SUBPIXEL_BITS}, "
                                  f"not {self.subpixel_bits!r}")
+        if not isinstance(self.fifth_path, bool):
+            raise ParameterError(f"fifth path must be True or False, not {self.fifth_path!r}")
+        if self.fifth_path and not self.is_sgm:
+            raise ParameterError(f"the fifth path is an SGM path: it needs aggregation "
+                                 f"{SGM!r}, not a {self.aggregation}x{self.aggregation} box")
 
     def _resolve_penalties(self):
         """Validate the SGM penalties and store the defaults in place of ``None``."""
@@ -296,10 +306,11 @@ class StereoParams:
         """Width of the aggregated cost S that the winner-takes-all compares.
 
         Box: bitlen(A^2 Cmax). SGM: the sum of the four path costs,
-        bitlen(K Cmax + P2 + 3 (Cmax + P2)) (:func:`~.sgm.sgm_summed_cost_bits`).
+        bitlen(K Cmax + P2 + 3 (Cmax + P2)), or of five with the fifth path,
+        bitlen(2 (K Cmax + P2) + 3 (Cmax + P2)) (:func:`~.sgm.sgm_summed_cost_bits`).
         """
         if self.is_sgm:
-            return sgm_summed_cost_bits(self.max_cost, self.p2)
+            return sgm_summed_cost_bits(self.max_cost, self.p2, self.fifth_path)
         return (self.max_cost * self.aggregation * self.aggregation).bit_length()
 
     @property
@@ -349,7 +360,8 @@ class StereoParams:
         if not self.is_sgm:
             return f"A={self.aggregation}"
         adapt = "off" if self.p2_adapt == P2_ADAPT_OFF else str(self.p2_adapt)
-        return f"SGM P1={self.p1} P2={self.p2} t={adapt}"
+        fifth = " 5 paths" if self.fifth_path else ""
+        return f"SGM P1={self.p1} P2={self.p2} t={adapt}{fifth}"
 
 
 def default_p2(cost_term):

@@ -175,8 +175,10 @@ def sgm_left_loop_bits(max_cost, p1, p2):
     return (_left_bound(max_cost, p2) + int(p1)).bit_length() + 1
 
 
-def sgm_summed_cost_bits(max_cost, p2):
+def sgm_summed_cost_bits(max_cost, p2, fifth_path=False):
     """Width of the summed cost S of all paths: bitlen((K Cmax + P2) + 3 (Cmax + P2)), the
-    left path's bound plus the three paths from the row above."""
+    left path's bound plus the three paths from the row above; with the fifth path (the
+    left path mirrored, bounded alike) bitlen(2 (K Cmax + P2) + 3 (Cmax + P2))."""
     rows = SGM_PATH_COUNT - 1
-    return (_left_bound(max_cost, p2) + rows * (int(max_cost) + int(p2))).bit_length()
+    along = 2 if fifth_path else 1
+    return (along * _left_bound(max_cost, p2) + rows * (int(max_cost) + int(p2))).bit_length()

@@ -1,6 +1,7 @@
 """docs/sgm/options_study.py's options against plain implementations written from its
 docstring: the path from the right, the uniqueness test, the median variants."""
 
+import json
 import sys
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from npstereo.golden.median import median3
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "sgm"))
 import options_study  # noqa: E402
+from left_path_study import rows_json  # noqa: E402
 
 
 def plain_right_path(volume, p1, p2, guide, adapt):
@@ -60,3 +62,28 @@ def test_study_median_fill_is_the_golden_median():
     valid = options_study.median3(disparity, "valid")
     assert ((valid < 0) == (disparity < 0)).all()          # never fills
     assert not np.array_equal(valid, median3(disparity))
+
+
+def test_only_one_group_keeps_the_other_rows(tmp_path, monkeypatch, capsys):
+    """``--only GROUP`` replaces that group's rows of ``--out`` and keeps every other row;
+    ``group_of`` names the group of every row the study stores."""
+    rows = [dict(scene="teddy", method="OpenCV StereoSGBM MODE_HH", lr="yes", correct=1.0),
+            dict(scene="teddy", cost="census", p1=24, p2=79, adapt=5, paths=4, uniq=0,
+                 lr="yes", median="none", correct=2.0),
+            dict(scene="teddy", cost="census", p1=8, p2=48, adapt=3, paths=5, uniq=0,
+                 lr="yes", median="none", correct=3.0),
+            dict(scene="teddy", cost="ad3", p1=24, p2=72, adapt=5, paths=5, uniq=0,
+                 lr="yes", median="fill", correct=4.0),
+            dict(scene="teddy", cost="census", p1=24, p2=79, adapt=5,
+                 paths=options_study.TRACKED, uniq=0, lr="yes", median="none", correct=5.0)]
+    assert [options_study.group_of(r) for r in rows] == [
+        "peers", "census", "census wide", "ad3", "fifth"]
+    out = tmp_path / "study.json"
+    out.write_text(rows_json(rows))
+    fresh = dict(rows[-1], correct=6.0)
+    monkeypatch.setattr(options_study, "measure", lambda dataset, group: iter([fresh]))
+    monkeypatch.setattr(options_study, "report", lambda got: f"{len(got)} rows")
+    assert options_study.main(["--dataset", str(tmp_path), "--out", str(out),
+                               "--only", "fifth"]) == 0
+    assert json.loads(out.read_text())["rows"] == rows[:-1] + [fresh]
+    assert "5 rows" in capsys.readouterr().out

@@ -184,18 +184,22 @@ def rows_json(rows):
     return "{\"rows\": [\n" + ",\n".join(json.dumps(row) for row in rows) + "\n]}\n"
 
 
-def study_main(argv, description, measure, report, configs=CONFIGS):
+def study_main(argv, description, measure, report, configs=CONFIGS, group_of=None):
     """The command line of a study: ``--report`` prints ``report(rows)`` of ``--out``;
     otherwise ``measure(dataset, config)`` yields the rows of each configuration of
     ``configs`` (default :data:`CONFIGS`), written to ``--out`` after every configuration (an interrupted run
-    keeps what it measured)."""
+    keeps what it measured). With ``group_of`` (a row's configuration) ``--only CONFIG``
+    measures that one configuration and keeps the other rows of an existing ``--out``, so
+    that an option added later costs its own run, not the whole study's."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--dataset", type=Path)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--report", action="store_true",
                         help="print the table of an existing --out instead of measuring")
-    parser.add_argument("--add", choices=configs, metavar="CONFIG",
-                        help="measure this configuration only and add its rows to --out's")
+    if group_of is not None:
+        parser.add_argument("--only", choices=configs,
+                            help="measure this configuration alone, keep the other rows of "
+                                 "--out")
     args = parser.parse_args(argv)
     if args.report:
         print(report(json.loads(args.out.read_text())["rows"]))
@@ -203,8 +207,11 @@ def study_main(argv, description, measure, report, configs=CONFIGS):
     if args.dataset is None:
         parser.error("--dataset is needed to measure (teddy: Middlebury 2003 with disp6.pgm)")
     rows = []
-    if args.add is not None:
-        rows, configs = json.loads(args.out.read_text())["rows"], (args.add,)
+    if getattr(args, "only", None):
+        if args.out.exists():
+            rows = [row for row in json.loads(args.out.read_text())["rows"]
+                    if group_of(row) != args.only]
+        configs = (args.only,)
     for config in configs:
         rows += measure(args.dataset, config)
         tmp = args.out.with_suffix(".tmp")

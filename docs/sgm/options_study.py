@@ -19,6 +19,9 @@ left path, golden/sgm.py):
 - ``5 paths``: a fifth path, right to left along the row, in exact SGM form (normalised by
   the successor's minimum over d), P2 adapted to |I(x) - I(x + 1)| like the left path's, so
   the left path mirrored; it is the ``top`` path of the volume transposed with x reversed;
+- ``5 tracked paths`` (group ``fifth``): the fifth path as the golden model defines it
+  (``StereoParams.fifth_path``, docs/semantics.md "The fifth path"): the tracked left path
+  of the mirrored row, which hardware can run at one position per clock;
 - ``uniq k``: reject the winner d* when some d with |d - d*| > 1 has S(d) (1 - 2^-k) < S(d*),
   in integers (S2 << k) - S2 < (S(d*) << k) with S2 the smallest S outside d* - 1 .. d* + 1:
   OpenCV's uniquenessRatio u = 100 / 2^k (k = 2, 3, 4: 25, 12.5, 6.25 %), a shift and a
@@ -34,7 +37,7 @@ left path, golden/sgm.py):
   (borders replicated), ``ad3`` the 3x3 sum of min(AD, 31) over the window, at most 255,
   >> 5 (borders replicated); ``ad3 exact`` the term as built (golden/cost_term.py: zero
   padding, right column 0 left out), through the golden SGM cost volume of
-  ``cost_term="ad3"``, at 24/72/5 only (``--add "ad3 exact"`` adds its rows to --out);
+  ``cost_term="ad3"``, at 24/72/5 only (``--only "ad3 exact"`` measures its rows into --out);
 - ``blur``: census 7x7 on images through a 3x3 binomial prefilter (added after teddy with
   noise 2e-3 showed the gap there); the guide of adaptive P2 is the filtered image too;
 - penalties P1, P2 and adaptive P2's t re-chosen on all seven conditions.
@@ -62,13 +65,22 @@ from bench_quality import LR_THRESHOLD, opencv_maps, opencv_matchers  # noqa: E4
 
 #: Measurement groups, one JSON update each: the peers, each matching cost, the census
 #: cost's grid widened (smaller P1, t = 3 and a constant P2) once the median had changed the
-#: best penalties, and census on prefiltered images (added after teddy with noise).
-GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide", "blur", "ad3 exact")
+#: best penalties, census on prefiltered images (added after teddy with noise), the ad3
+#: term as built (added with it) and the golden model's tracked fifth path (added with it).
+GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide", "blur", "ad3 exact",
+          "fifth")
 #: Penalty grids (P1, P2, t): the census one around the defaults, the others' P2 at most
 #: 127 - Cmax so that the path costs stay at 7 bits as the defaults' do.
 CENSUS_GRID = list(itertools.product((16, 24, 32), (48, 64, 79), (4, 5)))
 EXTRA_GRID = list(itertools.product((16, 24), (64, 72), (5,)))
 BLUR_GRID = list(itertools.product((16, 24), (64, 79), (5,)))
+#: The tracked fifth path's penalties: the defaults, the best of the exact fifth path
+#: (constant P2) and the neighbours of the defaults in each direction.
+FIFTH_GRID = [(24, 79, 5), (24, 79, None), (16, 79, 5), (32, 79, 5), (24, 64, 5),
+              (16, 79, 4)]
+#: The ``paths`` value of the rows with the tracked fifth path (4 and 5 are the four
+#: raster-order paths and the exact fifth path).
+TRACKED = "5 tracked"
 WIDE_GRID = list(itertools.product((8, 12), (48, 64, 79), (3, 4, 5, None))) + \
     list(itertools.product((16, 24), (64, 79), (3, None)))
 UNIQUENESS = (0, 2, 3, 4)
@@ -208,8 +220,8 @@ def measure(dataset, group):
         yield from measure_peers(dataset)
         return
     grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID, "blur": BLUR_GRID,
-            "ad3 exact": [(24, 72, 5)]}.get(group, EXTRA_GRID)
-    cost = group if group == "ad3 exact" else group.split()[0]
+            "ad3 exact": [(24, 72, 5)], "fifth": FIFTH_GRID}.get(group, EXTRA_GRID)
+    cost = {"fifth": "census", "ad3 exact": "ad3 exact"}.get(group, group.split()[0])
     for scene, left, right, truth, disparities in conditions(dataset):
         params = StereoParams(transform="census", block=7, disparities=disparities)
         if cost == "ad3 exact":
@@ -228,15 +240,21 @@ def measure(dataset, group):
             four = sum(sgm.path_costs(volume, path, p1, p2, guide=left, adapt=adapt,
                                       max_cost=max_cost).astype(np.int64)
                        for path in SGM_PATHS)
-            five = four + right_path(volume, p1, p2, left, adapt, max_cost)
-            for paths, summed in ((4, four), (5, five)):
+            if group == "fifth":
+                five = four + sgm.right_path_costs(volume, p1, p2, left, adapt,
+                                                   max_cost).astype(np.int64)
+                variants = ((TRACKED, five),)
+            else:
+                five = four + right_path(volume, p1, p2, left, adapt, max_cost)
+                variants = ((4, four), (5, five))
+            for paths, summed in variants:
                 for row in score_summed(summed, truth, disparities):
                     row = dict(scene=scene, cost=cost, p1=p1, p2=p2, adapt=adapt,
                                paths=paths, **row)
                     if stored(row):
                         yield row
             print(f"{group:6s} {scene:26s} P1={p1} P2={p2} t={adapt}: 4 paths "
-                  f"{_base(four, truth, disparities):6.2f}, 5 paths "
+                  f"{_base(four, truth, disparities):6.2f}, {variants[-1][0]} paths "
                   f"{_base(five, truth, disparities):6.2f} (L/R check)", flush=True)
 
 
@@ -271,7 +289,10 @@ ALONE = [("census", 24, 79, 5, 4, 0, "none"), ("census", 24, 79, 5, 5, 0, "none"
          ("ad", 24, 72, 5, 4, 0, "fill"), ("ad3", 24, 72, 5, 4, 0, "fill"),
          ("ad", 24, 72, 5, 5, 0, "fill"), ("ad3", 24, 72, 5, 5, 0, "fill"),
          ("ad3 exact", 24, 72, 5, 4, 0, "none"), ("ad3 exact", 24, 72, 5, 4, 0, "fill"),
-         ("ad3 exact", 24, 72, 5, 5, 0, "fill")]
+         ("ad3 exact", 24, 72, 5, 5, 0, "fill"),
+         ("census", 24, 79, 5, TRACKED, 0, "none"), ("census", 24, 79, 5, TRACKED, 0, "fill"),
+         ("census", 24, 79, None, 5, 0, "none"), ("census", 24, 79, None, TRACKED, 0, "none"),
+         ("census", 24, 79, None, 5, 0, "fill"), ("census", 24, 79, None, TRACKED, 0, "fill")]
 
 
 def _label(key):
@@ -325,7 +346,7 @@ def report(rows):
                   "|---|---|" + "---:|" * (len(names) + 3)]
         for cost, paths, median in itertools.product(("census", "ad", "grad", "ad3", "blur",
                                                       "ad3 exact"),
-                                                     (4, 5),
+                                                     (4, 5, TRACKED),
                                                      ("none", "fill")):
             candidates = [(np.mean(list(values.values())), key, values)
                           for (check, key), _ in table.items()
@@ -341,8 +362,21 @@ def report(rows):
     return "\n".join(lines)
 
 
+def group_of(row):
+    """The group of :data:`GROUPS` that measured ``row`` (``--only`` replaces its rows)."""
+    if "method" in row:
+        return "peers"
+    if row["paths"] == TRACKED:
+        return "fifth"
+    if row["cost"] != "census":
+        return row["cost"]
+    census = (row["p1"], row["p2"], row["adapt"]) in CENSUS_GRID
+    return "census" if census else "census wide"
+
+
 def main(argv=None):
-    return study_main(argv, __doc__.splitlines()[0], measure, report, configs=GROUPS)
+    return study_main(argv, __doc__.splitlines()[0], measure, report, configs=GROUPS,
+                      group_of=group_of)
 
 
 if __name__ == "__main__":

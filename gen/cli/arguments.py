@@ -121,6 +121,10 @@ def add_matching_arguments(parser, many=False, max_block=None, max_disparities=N
                      help=f"a term added to the census cost: {', '.join(COST_TERMS)}, the 3x3 "
                           "sum of clipped absolute pixel differences >> 5 (0 .. 7; Cmax + 7, "
                           f"default P2 {default_p2('ad3')}; docs/semantics.md) (default none)")
+    sgm.add_argument("--fifth-path", action="store_true",
+                     help="a fifth path, right to left along the row (the left path "
+                          "mirrored; the hardware's sums then trail by two rows) "
+                          "(default off)")
 
 
 def add_lr_arguments(parser):
@@ -195,7 +199,8 @@ def _sgm_options(args):
     given = [name for name, value in (("--p1", args.p1), ("--p2", args.p2),
                                       ("--p2-adapt", args.p2_adapt),
                                       ("--cost-term", args.cost_term)) if value is not None]
-    return given + (["--no-p2-adapt"] if args.no_p2_adapt else [])
+    return (given + (["--no-p2-adapt"] if args.no_p2_adapt else [])
+            + (["--fifth-path"] if getattr(args, "fifth_path", False) else []))
 
 
 def aggregations_from_args(args, many=False):
@@ -237,7 +242,8 @@ def params_from_args(args, transform=None, block=None, aggregation=None):
         p1=args.p1 if sgm else None, p2=args.p2 if sgm else None,
         p2_adapt=adapt if sgm else None, median=getattr(args, "median", False),
         subpixel_bits=getattr(args, "subpixel_bits", STEREO_DEFAULTS["subpixel_bits"]),
-        cost_term=args.cost_term if sgm else None)
+        cost_term=args.cost_term if sgm else None,
+        fifth_path=sgm and getattr(args, "fifth_path", False))
 
 
 def check_output_folder(value, option="--out"):

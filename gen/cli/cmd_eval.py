@@ -64,6 +64,7 @@ def run(args):
                      "transform": p.transform, "block": p.block, "disparities": p.disparities,
                      "rounds": p.rounds, "aggregation": p.aggregation, "p1": p.p1, "p2": p.p2,
                      "p2_adapt": p.p2_adapt, "median": p.median, "cost_term": p.cost_term,
+                     "fifth_path": p.fifth_path,
                      "aggregation_label": p.describe_aggregation()
                      + (f", + {p.cost_term}" if p.cost_term else "")
                      + (", 3x3 median" if p.median else ""),

@@ -1,0 +1,197 @@
+"""The fifth SGM path's recursion in hardware: the left path's lane update over a row fed
+right to left.
+
+docs/semantics.md ("The fifth path") defines the fifth path as the left path of the
+mirrored row, so its hardware is :func:`.sgm_left.left_path` unchanged, fed the row's
+positions in mirrored order: the caller gives, slot after slot, the costs of column
+x = W - 1 - x' on the tag's column x', and P2 from |I(x) - I(x + 1)|. The left path keys
+everything it keeps (its files, its fresh start) on the tag's column and writes only in
+slots that carry a position, so the order of the columns is the only thing that changes.
+
+Inside the SGM stage (:func:`fifth_path`, docs/hardware.md "The fifth path"): while row
+y + 1 streams in, slot x of it reads column W - 1 - x of row y from row buffers whose
+address direction alternates every row (a word is read, then rewritten with row y + 1's
+word a clock later), runs the recursion on it and adds L_right to row y's S4; the sums S5
+of row y, mirrored, go into one more such buffer, which gives them back in raster order
+while row y + 2 streams in. The stage's interface is unchanged; its sums trail the
+positions that carry them by two rows (``centre`` names theirs).
+"""
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
+from amaranth.lib import data, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
+from .banks import line_memory
+from .common import SlotClock, bits_for, register, tag_layout, taps, y_range
+from .plan_timing import sgm_fifth_timing, sgm_timing
+from .sgm_left import PathOwner, left_path
+
+__all__ = ["RightPathRecursion", "fifth_path"]
+
+
+def _lanes(word, count, bits):
+    """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
+    return [word[i * bits:(i + 1) * bits] for i in range(count)]
+
+
+class RightPathRecursion(PathOwner, wiring.Component):
+    """L of the fifth path per lane for a row streamed in mirrored column order.
+
+    Parameters
+    ----------
+    params : StereoParams
+        With ``aggregation="sgm"``, width and height (any R that divides D).
+
+    Attributes
+    ----------
+    costs : In(ArrayLayout(unsigned(cost_bits), D/R))
+        C(W - 1 - x', j*D/R + i) on lane i in round j, for the tag's mirrored column x'.
+    p2 : In(unsigned(bitlen(P2)))
+        P2 of the fifth path at that column (slot-aligned with ``costs``).
+    tag : In(tag_layout)
+        The position in mirrored coordinates (x' = W - 1 - x), slot-aligned at the input.
+    first, round : In
+        Slot timing at the input.
+    lanes : Out(ArrayLayout(unsigned(left_cost_bits), D/R))
+        L_right(W - 1 - x', j*D/R + i) on lane i, ``latency`` clocks after the input.
+    centre : Out(tag_layout)
+        The tag of ``lanes``.
+    """
+
+    def __init__(self, params):
+        self.params = params
+        self.timing = sgm_timing(params)
+        self.latency = self.timing.left
+        super().__init__({
+            "costs": In(data.ArrayLayout(unsigned(params.cost_bits), params.per_round)),
+            "p2": In(bits_for(params.p2)),
+            "tag": In(tag_layout(params)),
+            "first": In(1), "round": In(bits_for(params.rounds - 1)),
+            "lanes": Out(data.ArrayLayout(unsigned(params.left_cost_bits),
+                                          params.per_round)),
+            "centre": Out(tag_layout(params)),
+        })
+
+    def elaborate(self, platform):
+        p, t = self.params, self.timing
+        m = Module()
+        self._slots = slots = SlotClock(m, self.first, self.round, p.rounds, "sgm_right")
+        self._valid = {}
+        units = p.per_round
+        costs = self.costs.as_value()
+        # As deep as the SGM stage's taps need for the left path alone.
+        self._costs = [_lanes(word, units, p.cost_bits) for word in
+                       taps(m, costs, max(t.loop + t.left_stages - 1, t.left_picks[-2] + 1),
+                            "sgm_right_cost")]
+        # Fresh start at the mirrored row's first column, and P2, slot-aligned at
+        # ``timing.guide`` as the SGM stage gives them to the left path.
+        flag = register(m, self.tag.x == 0, 1, "sgm_right_fresh")
+        fresh = taps(m, flag, t.guide - 1, "sgm_right_fresh")[-1]
+        p2 = self._aligned(self.p2, 0, t.guide, "sgm_right_p2")
+        lanes = left_path(self, m, fresh, p2)
+        for i, value in enumerate(lanes):
+            m.d.comb += self.lanes[i].eq(value)
+        m.d.comb += self.centre.eq(slots.delay(self.tag, 0, self.latency, "sgm_right_centre"))
+        return m
+
+
+def _turnaround(owner, m, name, width, offset, column, data):
+    """A row of words (W R of ``width`` bits) read at ``column`` (slot-aligned at 0) and
+    the round at ``offset``, the word read out a clock later, when ``data`` is written in
+    its place. ``column`` alternates its direction every row, so the word read is the
+    previous row's at the mirrored column. The row's last position and the next row's first
+    share a column: at R = 1 the second reads it in the clock the first writes it, and is
+    given the word written (the block RAM's ports do not order a read and a write of one
+    address in one clock)."""
+    p, slots = owner.params, owner._slots
+    depth = p.width * p.rounds
+    memory = line_memory(m, name, unsigned(width), depth)
+    at = owner._aligned(column, 0, offset, f"{name}_column")
+    address = at * p.rounds + slots.round(offset) if p.rounds > 1 else at
+    written = register(m, address, range(depth), f"{name}_write_address")
+    enable = owner._valid_at(offset + 1)
+    m.d.comb += [memory.read_addr.eq(address), memory.write_addr.eq(written),
+                 memory.write_data.eq(data), memory.write_en.eq(enable)]
+    return _forwarded(m, name, address, written, enable, data, memory.read_data)
+
+
+def _forwarded(m, name, address, written, enable, data, read_data):
+    """``read_data`` of the read at ``address``, or ``data`` where that read met the write
+    of ``data`` at ``written`` in the same clock."""
+    hit = register(m, (address == written) & enable, 1, f"{name}_hit")
+    held = register(m, data, len(data), f"{name}_held")
+    return Mux(hit, held, read_data)
+
+
+def _direction(mirror, starts):
+    """Whether the row's addresses run right to left: flipped at every row start."""
+    return mirror ^ starts
+
+
+def fifth_path(owner, m, four, p2_left):
+    """S5 per lane and its tag at ``sgm_fifth_timing(...).latency`` (module docstring).
+
+    ``owner`` is the SGM stage being elaborated; ``four`` the lanes' S4 at its
+    ``timing.latency``, ``p2_left`` the left path's P2, slot-aligned at ``timing.guide``:
+    the fifth path's P2 at column x is the left path's at x + 1, |I(x + 1) - I(x)|, i.e.
+    the previous position's of the mirrored row.
+    """
+    p, t, slots, tag = owner.params, owner.timing, owner._slots, owner.tag
+    f = sgm_fifth_timing(p, owner.every)
+    units, width = p.per_round, p.width
+    cost_bits, four_bits = p.cost_bits, sgm_summed_cost_bits(p.max_cost, p.p2)
+    # Row starts: the address direction flips, and the rows' y are kept two rows back. In
+    # a row's first slot the registers change after its first clock, so the values of the
+    # slot are formed from their old contents there (R clocks alike).
+    starts = slots.first(0) & tag.valid & (tag.x == 0)
+    mirror = Signal(name="sgm_fifth_mirror")
+    mirrored = _direction(mirror, starts)
+    # Reset to a row above every frame: before two rows have passed, no sum is of a
+    # frame row.
+    rows = [Signal(tag.y.shape(), name=f"sgm_fifth_row{k}", init=y_range(p)[0])
+            for k in range(3)]
+    with m.If(starts):
+        m.d.sync += [mirror.eq(mirrored), rows[2].eq(rows[1]), rows[1].eq(rows[0]),
+                     rows[0].eq(tag.y)]
+    before = Mux(starts, rows[0], rows[1])           # y of the row before this one
+    two_before = Mux(starts, rows[1], rows[2])       # and of the one before that
+    column = Mux(mirrored, width - 1 - tag.x, tag.x)
+
+    adaptive = p.p2_adapt != P2_ADAPT_OFF
+    p2_bits = bits_for(p.p2) if adaptive else 0
+    costs_word = Cat(*owner._costs[f.costs + 1],
+                     owner._aligned(p2_left, t.guide, f.costs + 1, "sgm_fifth_p2")
+                     if adaptive else Const(0, 0))
+    stored = _turnaround(owner, m, "sgm_fifth_costs", units * cost_bits + p2_bits, f.costs,
+                         column, costs_word)
+    m.submodules.sgm_right = right = RightPathRecursion(p)
+    at = f.costs + 1
+    m.d.comb += [right.first.eq(slots.first(at)), right.round.eq(slots.round(at)),
+                 right.tag.x.eq(owner._aligned(tag.x, 0, at, "sgm_fifth_x")),
+                 right.tag.y.eq(owner._aligned(before, 0, at, "sgm_fifth_y")),
+                 right.tag.valid.eq(owner._valid_at(at)), right.tag.live.eq(1)]
+    m.d.comb += [right.costs[i].eq(c) for i, c in enumerate(_lanes(stored, units, cost_bits))]
+    if adaptive:
+        # The previous position's P2, held through the slot (loaded in its last clock).
+        previous = Signal(p2_bits, name="sgm_fifth_p2_previous", reset_less=True)
+        with m.If(slots.first(at + p.rounds - 1) & owner._valid_at(at)):
+            m.d.sync += previous.eq(stored[units * cost_bits:])
+        m.d.comb += right.p2.eq(previous)
+    else:
+        m.d.comb += right.p2.eq(p.p2)
+
+    # S4 of the row before, at the mirrored column, waits for L_right.
+    sums = _turnaround(owner, m, "sgm_fifth_four", units * four_bits, f.four - 1, column,
+                       Cat(*(v[:four_bits] for v in four)))
+    sums = _lanes(taps(m, sums, f.right - f.four, "sgm_fifth_four_aligned")[-1], units,
+                  four_bits)
+    total = [register(m, s + right.lanes[i], p.aggregated_cost_bits, f"sgm_fifth_s{i}")
+             for i, s in enumerate(sums)]
+    # Back into raster order through the last row buffer.
+    out = _turnaround(owner, m, "sgm_fifth_out", units * p.aggregated_cost_bits, f.right,
+                      column, Cat(*total))
+    centre = slots.delay(tag, 0, f.latency, "sgm_fifth_centre")
+    y = owner._aligned(two_before, 0, f.latency, "sgm_fifth_centre_y")
+    lanes = _lanes(out, units, p.aggregated_cost_bits)
+    return lanes, (centre.x, y, centre.valid, centre.live)
