@@ -73,15 +73,16 @@ BOX = [("census", 9, 3), ("census", 5, 3), ("census", 13, 3)]
 #: the best census 5x5 with a constant P2; then the defaults with the 3x3 median (issue 28,
 #: docs/sgm.md "Quality options"), and with the median at the penalties its study chose
 #: (P1 = 16, t = 4); the README's recommendation (the defaults with the median) with F = 4
-#: fractional bits (docs/sgm.md, "Sub-pixel output"); last the median with the ad3 cost
-#: term at its default P2.
+#: fractional bits (docs/sgm.md, "Sub-pixel output"); the median with the ad3 cost term at
+#: its default P2; last the README's recommended SGM configuration, that with the fifth
+#: path as well (docs/sgm.md, "Quality options").
 _DEFAULTS = tuple(SGM_RECOMMENDED[0][name]
                   for name in ("transform", "block", "p1", "p2", "p2_adapt"))
 SUBPIXEL_BITS = 4
 SGM = [tuple(fields[name] for name in ("transform", "block", "p1", "p2", "p2_adapt"))
        + (False, 0) for fields in SGM_RECOMMENDED] + [("census", 5, 12, 32, None, False, 0)] + [
     _DEFAULTS + (True, 0), ("census", 7, 16, 79, 4, True, 0), _DEFAULTS + (True, SUBPIXEL_BITS),
-    ("census", 7, 24, 72, 5, True, 0, "ad3")]
+    ("census", 7, 24, 72, 5, True, 0, "ad3"), ("census", 7, 24, 72, 5, True, 0, "ad3", True)]
 
 #: OpenCV SGBM block size and penalties as the issue prescribes (OpenCV's documented rule
 #: of thumb P1 = 8 * channels * bs^2, P2 = 32 * channels * bs^2 for one gray channel).
@@ -158,11 +159,12 @@ def score(disparity, truth, disparities):
 
 
 def sgm_maps(left, right, transform, block, disparities, p1, p2, adapt, median, bits,
-             cost_term=None):
+             cost_term=None, fifth_path=False):
     """(map without check, map after the L/R check) of an npstereo SGM configuration, in
     levels (with F > 0 float32 with the fraction). The unchecked map with F > 0 is the
     fitted map of a run without the check (the checked run's raw maps are whole levels)."""
-    term = dict(aggregation="sgm", cost_term=cost_term) if cost_term else {}
+    term = dict(aggregation="sgm", cost_term=cost_term, fifth_path=fifth_path) \
+        if cost_term or fifth_path else {}
     params = StereoParams(transform=transform, block=block, disparities=disparities,
                           lr_threshold=LR_THRESHOLD, subpixel_bits=bits, **term)
     result = sgm.disparity_map(left, right, params, p1, p2, adapt=adapt)
@@ -254,13 +256,14 @@ def main(argv=None):
         unchecked[:, :params.first_valid_column] = INVALID
         add("npstereo box", f"npstereo {transform} {block}x{block}, {aggregation}x{aggregation}"
             f" box", (unchecked, result.disparity), time.perf_counter() - start)
-    for transform, block, p1, p2, adapt, median, bits, *term in SGM:
+    for transform, block, p1, p2, adapt, median, bits, *extra in SGM:
         start = time.perf_counter()
         maps = sgm_maps(left, right, transform, block, disparities, p1, p2, adapt, median,
-                        bits, *term)
+                        bits, *extra)
+        term, fifth = (extra + [None, False])[:2]
         p2_text = f"P2={p2}" + (f" adaptive t={adapt}" if adapt is not None else "")
-        add("npstereo SGM", f"npstereo {transform} {block}x{block}, SGM 4 paths P1={p1} "
-            f"{p2_text}" + (f", + {term[0]}" if term else "")
+        add("npstereo SGM", f"npstereo {transform} {block}x{block}, SGM {5 if fifth else 4} "
+            f"paths P1={p1} {p2_text}" + (f", + {term}" if term else "")
             + (", 3x3 median" if median else "")
             + (f", sub-pixel F={bits}" if bits else ""), maps, time.perf_counter() - start)
     for name, matcher in opencv_matchers(cv2, num_disparities):

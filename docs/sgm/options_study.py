@@ -66,9 +66,10 @@ from bench_quality import LR_THRESHOLD, opencv_maps, opencv_matchers  # noqa: E4
 #: Measurement groups, one JSON update each: the peers, each matching cost, the census
 #: cost's grid widened (smaller P1, t = 3 and a constant P2) once the median had changed the
 #: best penalties, census on prefiltered images (added after teddy with noise), the ad3
-#: term as built (added with it) and the golden model's tracked fifth path (added with it).
+#: term as built, the golden model's tracked fifth path, and both together (each added with
+#: what it measures).
 GROUPS = ("peers", "census", "ad", "grad", "ad3", "census wide", "blur", "ad3 exact",
-          "fifth")
+          "fifth", "fifth ad3")
 #: Penalty grids (P1, P2, t): the census one around the defaults, the others' P2 at most
 #: 127 - Cmax so that the path costs stay at 7 bits as the defaults' do.
 CENSUS_GRID = list(itertools.product((16, 24, 32), (48, 64, 79), (4, 5)))
@@ -220,8 +221,10 @@ def measure(dataset, group):
         yield from measure_peers(dataset)
         return
     grid = {"census": CENSUS_GRID, "census wide": WIDE_GRID, "blur": BLUR_GRID,
-            "ad3 exact": [(24, 72, 5)], "fifth": FIFTH_GRID}.get(group, EXTRA_GRID)
-    cost = {"fifth": "census", "ad3 exact": "ad3 exact"}.get(group, group.split()[0])
+            "ad3 exact": [(24, 72, 5)], "fifth": FIFTH_GRID,
+            "fifth ad3": [(24, 72, 5)]}.get(group, EXTRA_GRID)
+    cost = {"fifth": "census", "ad3 exact": "ad3 exact",
+            "fifth ad3": "ad3 exact"}.get(group, group.split()[0])
     for scene, left, right, truth, disparities in conditions(dataset):
         params = StereoParams(transform="census", block=7, disparities=disparities)
         if cost == "ad3 exact":
@@ -240,7 +243,7 @@ def measure(dataset, group):
             four = sum(sgm.path_costs(volume, path, p1, p2, guide=left, adapt=adapt,
                                       max_cost=max_cost).astype(np.int64)
                        for path in SGM_PATHS)
-            if group == "fifth":
+            if group in ("fifth", "fifth ad3"):
                 five = four + sgm.right_path_costs(volume, p1, p2, left, adapt,
                                                    max_cost).astype(np.int64)
                 variants = ((TRACKED, five),)
@@ -292,7 +295,8 @@ ALONE = [("census", 24, 79, 5, 4, 0, "none"), ("census", 24, 79, 5, 5, 0, "none"
          ("ad3 exact", 24, 72, 5, 5, 0, "fill"),
          ("census", 24, 79, 5, TRACKED, 0, "none"), ("census", 24, 79, 5, TRACKED, 0, "fill"),
          ("census", 24, 79, None, 5, 0, "none"), ("census", 24, 79, None, TRACKED, 0, "none"),
-         ("census", 24, 79, None, 5, 0, "fill"), ("census", 24, 79, None, TRACKED, 0, "fill")]
+         ("census", 24, 79, None, 5, 0, "fill"), ("census", 24, 79, None, TRACKED, 0, "fill"),
+         ("ad3 exact", 24, 72, 5, TRACKED, 0, "none"), ("ad3 exact", 24, 72, 5, TRACKED, 0, "fill")]
 
 
 def _label(key):
@@ -367,7 +371,7 @@ def group_of(row):
     if "method" in row:
         return "peers"
     if row["paths"] == TRACKED:
-        return "fifth"
+        return "fifth ad3" if row["cost"] == "ad3 exact" else "fifth"
     if row["cost"] != "census":
         return row["cost"]
     census = (row["p1"], row["p2"], row["adapt"]) in CENSUS_GRID
