@@ -261,6 +261,18 @@ def test_core_with_the_fifth_path_matches_golden(transform, block, disparities, 
                               disparity_map(*pair, params.replace(fifth_path=False)).disparity)
 
 
+def test_core_with_every_quality_option_matches_golden():
+    """The README's recommended SGM configuration in small: the fifth path, the ad3 term,
+    the median, and F = 2 fractional bits besides, with gaps and stalls."""
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=4,
+                          aggregation="sgm", p1=8, p2=40, cost_term="ad3", fifth_path=True,
+                          median=True, subpixel_bits=2, width=24, height=6)
+    pair = stereo_pair("layers", params.height, params.width, 5)
+    result = check_frames(params, [pair], frame_beats(*pair), valid_prob=0.8, ready_prob=0.8,
+                          seed=1)
+    assert result["errors"] == 0
+
+
 def test_core_with_the_fifth_path_reset_misframing_and_frames_back_to_back():
     """A reset in mid-frame, a misframed frame, then two frames back to back (the first's
     last two rows leave while the second's first rows come in): both bit-exact."""
