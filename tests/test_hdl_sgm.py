@@ -76,7 +76,8 @@ def stage_slots(width, height, stream, bubbles):
 
 def check_stage(params, monkeypatch, seed, bubbles=0.3):
     """Stream a random volume through the stage alone; every S of the frame must be the
-    golden model's."""
+    golden model's. With the fifth path the sums of row y leave while row y + 2 streams in
+    (two rows below the frame close it)."""
     rng, stream = np.random.default_rng(seed), random.Random(seed)
     width, height, rounds, units = params.width, params.height, params.rounds, \
         params.per_round
@@ -88,10 +89,12 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
     guide[height // 2, :] = guide[height // 2 - 1, :]      # steps of 0 as well
     adapt = params.p2_adapt or None
     expected = golden_sgm.aggregate(volume, params.p1, params.p2, guide=guide, adapt=adapt,
-                                    max_cost=top)
+                                    max_cost=top, fifth_path=params.fifth_path)
+    late = 2 if params.fifth_path else 0
     padded = np.pad(guide, 1)
 
     slots = stage_slots(width, height, stream, bubbles)
+    slots += [("below", x, y) for y in range(height, height + late) for x in range(width)]
     clocks = [(slot, j) for slot in slots for j in range(rounds)]
     fill = random_memories(monkeypatch, seed)
     dut = SemiGlobalAggregation(params)
@@ -118,13 +121,13 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
                     ctx.set(dut.costs[i], int(volume[y, x, j * units + i]))
                 for k, (dy, dx) in enumerate(GUIDE):
                     ctx.set(dut.guide[k], int(padded[y + dy + 1, x + dx + 1]))
-            if t >= latency and clocks[t - latency][0] is not None \
-                    and clocks[t - latency][0][0] == "frame":
-                (_, x, y), j = clocks[t - latency]
-                centre = ctx.get(dut.centre)
-                assert (centre.x, centre.y, centre.valid) == (x, y, 1)
-                for i in range(units):
-                    got[(y, x, j * units + i)] = ctx.get(dut.sums[i])
+            if t >= latency and clocks[t - latency][0] is not None:
+                (kind, x, y), j = clocks[t - latency]
+                if kind in ("frame", "below") and 0 <= y - late < height:
+                    centre = ctx.get(dut.centre)
+                    assert (centre.x, centre.y, centre.valid) == (x, y - late, 1)
+                    for i in range(units):
+                        got[(y - late, x, j * units + i)] = ctx.get(dut.sums[i])
             await ctx.tick()
 
     sim = Simulator(dut)

@@ -15,7 +15,6 @@ from amaranth.hdl import Const
 from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
-from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
 from npstereo.golden.pipeline import disparity_map
 from npstereo.hdl import plan_timing, sgm_right
 from npstereo.hdl.sgm_right import RightPathRecursion
@@ -24,7 +23,7 @@ from npstereo.params import StereoParams
 from hdl_helpers import RESET, check_frames, frame_beats
 from scenes import stereo_pair
 from test_hdl_plan import measured_flush, measured_period, planned_flush
-from test_hdl_sgm import random_memories, stage_slots
+from test_hdl_sgm import check_stage, random_memories, stage_slots
 
 
 def right_params(transform, block, disparities, rounds, p1, p2, adapt, width, height):
@@ -136,69 +135,6 @@ def test_broken_p2_from_the_left_neighbour_is_caught(monkeypatch):
 # The SGM stage with the fifth path -----------------------------------------------------------
 
 
-def check_stage_fifth(params, monkeypatch, seed, bubbles=0.3):
-    """Stream a random volume through the SGM stage with the fifth path; the sums of row y
-    leave while row y + 2 streams in (two rows below the frame close it), and every S of
-    the frame must be the golden model's five-path sum."""
-    rng, stream = np.random.default_rng(seed), random.Random(seed)
-    width, height, rounds, units = params.width, params.height, params.rounds, \
-        params.per_round
-    top = params.max_cost
-    volume = rng.integers(0, top + 1, (height, width, params.disparities))
-    volume[::3, ::2] = top
-    volume[1::4, :, :2] = 0
-    guide = rng.integers(0, 256, (height, width)).astype(np.uint8)
-    adapt = params.p2_adapt or None
-    expected = golden_sgm.aggregate(volume, params.p1, params.p2, guide=guide, adapt=adapt,
-                                    max_cost=top, fifth_path=True)
-    padded = np.pad(guide, 1)
-    slots = stage_slots(width, height, stream, bubbles)
-    slots += [("below", x, y) for y in (height, height + 1) for x in range(width)]
-    clocks = [(slot, j) for slot in slots for j in range(rounds)]
-    fill = random_memories(monkeypatch, seed)
-    dut = SemiGlobalAggregation(params)
-    latency, got = dut.latency, {}
-
-    async def testbench(ctx):
-        fill(ctx)
-        for t in range(len(clocks) + latency):
-            slot, j = clocks[t] if t < len(clocks) else (None, t % rounds)
-            ctx.set(dut.first, j == 0)
-            ctx.set(dut.round, j)
-            if slot is None or slot[0] != "frame":
-                x, y = (stream.randrange(width), 0) if slot is None else slot[1:]
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": slot is not None, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], stream.randrange(top + 1))
-                for k in range(len(GUIDE)):
-                    ctx.set(dut.guide[k], stream.randrange(256))
-            else:
-                _, x, y = slot
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], int(volume[y, x, j * units + i]))
-                for k, (dy, dx) in enumerate(GUIDE):
-                    ctx.set(dut.guide[k], int(padded[y + dy + 1, x + dx + 1]))
-            if t >= latency and clocks[t - latency][0] is not None:
-                (kind, x, y), j = clocks[t - latency]
-                if kind in ("frame", "below") and 0 <= y - 2 < height:
-                    centre = ctx.get(dut.centre)
-                    assert (centre.x, centre.y, centre.valid) == (x, y - 2, 1)
-                    for i in range(units):
-                        got[(y - 2, x, j * units + i)] = ctx.get(dut.sums[i])
-            await ctx.tick()
-
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(testbench)
-    sim.run()
-    assert len(got) == expected.size, "not every sum was compared"
-    mismatches = [(key, value, int(expected[key])) for key, value in sorted(got.items())
-                  if value != expected[key]]
-    assert not mismatches, (f"{len(mismatches)} sums differ, first ((y, x, d), got, "
-                            f"expected): {mismatches[0]}")
-
-
 @pytest.mark.parametrize("transform,block,disparities,rounds,p1,p2,adapt,width,height",
                          CASES)
 def test_stage_with_the_fifth_path_matches_golden(monkeypatch, transform, block,
@@ -206,14 +142,14 @@ def test_stage_with_the_fifth_path_matches_golden(monkeypatch, transform, block,
                                                   width, height):
     params = right_params(transform, block, disparities, rounds, p1, p2, adapt or 0,
                           width, height + 1).replace(fifth_path=True)
-    check_stage_fifth(params, monkeypatch, seed=disparities + rounds)
+    check_stage(params, monkeypatch, seed=disparities + rounds)
 
 
 FIFTH_BROKEN = right_params("census", 3, 4, 1, 3, 20, 2, 22, 3).replace(fifth_path=True)
 
 
 def test_broken_stage_baseline_matches(monkeypatch):
-    check_stage_fifth(FIFTH_BROKEN, monkeypatch, seed=5, bubbles=0)
+    check_stage(FIFTH_BROKEN, monkeypatch, seed=5, bubbles=0)
 
 
 def test_broken_forwarding_is_caught(monkeypatch):
@@ -222,14 +158,14 @@ def test_broken_forwarding_is_caught(monkeypatch):
     monkeypatch.setattr(sgm_right, "_forwarded",
                         lambda m, name, address, written, enable, data, read_data: read_data)
     with pytest.raises(AssertionError, match="sums differ"):
-        check_stage_fifth(FIFTH_BROKEN, monkeypatch, seed=5, bubbles=0)
+        check_stage(FIFTH_BROKEN, monkeypatch, seed=5, bubbles=0)
 
 
 def test_broken_fixed_direction_is_caught(monkeypatch):
     # Addresses left to right in every row: the reverse pass reads the row in raster order.
     monkeypatch.setattr(sgm_right, "_direction", lambda mirror, starts: Const(0))
     with pytest.raises(AssertionError, match="sums differ"):
-        check_stage_fifth(FIFTH_BROKEN, monkeypatch, seed=5)
+        check_stage(FIFTH_BROKEN, monkeypatch, seed=5)
 
 
 # The core with the fifth path --------------------------------------------------------------
