@@ -430,3 +430,16 @@ def test_plot_labels_name_the_varying_output_options():
     points = [{"params": dataclasses.asdict(p)} for p in chosen]
     assert _short_labels(points) == ["census 3 no median F=0", "census 3 no median F=4",
                                      "census 3 median F=0", "census 3 median F=4"]
+
+
+def test_plot_of_a_grid_whose_every_synthesis_failed(tmp_path):
+    """No point has logic (every synthesis failed or timed out): the plot is still drawn,
+    with the device's capacity and no points (an empty ``fits`` was a float array, and its
+    negation a TypeError)."""
+    from npstereo.gen.reports.plots import pareto_plot
+    points = [{"logic": None, "memory_bits": 1000, "fits": None, "logic_levels": None,
+               "quality": {"clean": {"correct": 50.0}}}]
+    path = tmp_path / "pareto.png"
+    pareto_plot(path, points, ["rank 3"], [], None, DEVICES["cyclonev-a9"], "logic_levels",
+                "LUT levels", "every synthesis failed")
+    assert Image.open(path).size[0] > 600

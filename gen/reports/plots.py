@@ -187,7 +187,7 @@ def pareto_plot(path, points, labels, front, recommended, device, colour_key, co
     colours = np.array([np.nan if v is None else v for v in values], dtype=float)
     largest = max(memory.max(), 1.0) if len(memory) else 1.0
     sizes = 40 + 560 * memory / largest
-    fits = np.array([bool(points[i]["fits"]) for i in shown])
+    fits = np.array([bool(points[i]["fits"]) for i in shown], dtype=bool)
     finite = colours[np.isfinite(colours)]
     low, high = (finite.min(), finite.max()) if len(finite) else (0.0, 1.0)
     if high - low < 1:
