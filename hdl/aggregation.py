@@ -19,7 +19,7 @@ by a register per step of the skew, so no control signal fans out to every unit.
 end unit i's sums wait S - s_i clocks, and all units' sums leave together.
 """
 
-from amaranth.hdl import Array, Cat, Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out

@@ -17,7 +17,8 @@ from amaranth.lib.memory import Memory
 from .common import pipe, replica
 from .plan_structure import BANK_CHOICE
 
-__all__ = ["choose_bank", "ADDRESS_SLICE_BITS", "banked_memory", "BLOCK_RAM_MODES", "slice_widths", "line_memory"]
+__all__ = ["choose_bank", "ADDRESS_SLICE_BITS", "banked_memory", "BLOCK_RAM_MODES",
+           "slice_widths", "line_memory"]
 
 
 #: Bits of a chosen word that one copy of the bank's index selects: a DP16KD's widest

@@ -373,9 +373,9 @@ class CalculationStage(wiring.Component):
         ``tag`` is slot-aligned at ``self.stored + 1``, where unit 0's operands are,
         ``early`` a clock before; unit i works s_i clocks later, and its masks are delayed
         with it. The box aggregation takes the units' costs skewed; for SGM unit i's
-        result waits S - s_i clocks, so that all units' results leave together. A cost is 0 (Cmax for SGM) where x - d < 0, where its row lies outside the
-        frame, and in slots without a position; elsewhere the cost term, if any, is added
-        (:meth:`_term`).
+        result waits S - s_i clocks, so that all units' results leave together. A cost is
+        0 (Cmax for SGM) where x - d < 0, where its row lies outside the frame, and in
+        slots without a position; elsewhere the cost term, if any, is added (:meth:`_term`).
         """
         p = self.params
         start = self.stored + 1

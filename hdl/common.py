@@ -19,8 +19,8 @@ from amaranth.hdl import Const, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import data
 from amaranth.lib.memory import Memory
 
-__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "delay", "round_base", "SlotClock", "Store",
-           "column_inside", "better", "absolute_difference"]
+__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "delay", "round_base", "SlotClock",
+           "Store", "column_inside", "better", "absolute_difference", "split_lanes"]
 
 
 def bits_for(maximum):
@@ -82,6 +82,11 @@ def replica(m, value, name, shape=None, enable=None, reset_less=False):
     reg = Signal(value.shape() if shape is None else shape, name=name, attrs={"keep": 1},
                  reset_less=reset_less)
     return _loaded(m, reg, value, enable)
+
+
+def split_lanes(word, count, bits):
+    """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
+    return [word[i * bits:(i + 1) * bits] for i in range(count)]
 
 
 def taps(m, value, depth, name):

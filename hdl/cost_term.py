@@ -25,7 +25,7 @@ round) and write-back, with the two older sums gated by x - d >= 1 and >= 2 and 
 fresh sum added; the clip to 255 and the shift.
 """
 
-from amaranth.hdl import Cat, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Mux, unsigned
 
 from ..params.cost_terms import AD3_CLIP, AD3_LIMIT, AD3_SHIFT
 from .common import Store, absolute_difference, pipe

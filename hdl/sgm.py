@@ -42,7 +42,7 @@ from amaranth.lib.wiring import In, Out
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .banks import banked_memory, line_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, \
-    tag_layout, taps
+    split_lanes, tag_layout, taps
 from .plan_structure import row_banks
 from .plan_timing import SGM_ROW_CLOCKS, sgm_fifth_timing, sgm_timing
 from .sgm_left import PathOwner, left_path
@@ -109,11 +109,6 @@ def _normalised(below, over, p2, fresh):
     return Mux(fresh, 0, Mux(below, over, p2))
 
 
-def _lanes(word, count, bits):
-    """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
-    return [word[i * bits:(i + 1) * bits] for i in range(count)]
-
-
 class SemiGlobalAggregation(PathOwner, wiring.Component):
     """Summed path costs S of the round's D/R disparities, for the position of the tag.
 
@@ -169,10 +164,10 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         m = Module()
         self._slots = slots = SlotClock(m, self.first, self.round, p.rounds, "sgm")
         self._valid = {}
-        units, bits = p.per_round, p.path_cost_bits
+        units = p.per_round
         costs = Cat(*(self.costs[i] for i in range(units)))
         #: The round's costs C, k clocks late at index k.
-        self._costs = [_lanes(word, units, p.cost_bits) for word in
+        self._costs = [split_lanes(word, units, p.cost_bits) for word in
                        taps(m, costs, max(t.rows - 1, t.loop + t.left_stages - 1,
                                            t.left_picks[-2] + 1,
                                            sgm_fifth_timing(p, self.every).costs + 1
@@ -196,10 +191,10 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         above_at = t.rows + sum(plan)
         aligned = max(t.left, above_at)
         above_bits = len(above[0])
-        above = _lanes(taps(m, Cat(*above), aligned - above_at, "sgm_above_aligned")[-1],
-                       units, above_bits)
-        left = _lanes(taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
-                      units, p.left_cost_bits)
+        above = split_lanes(taps(m, Cat(*above), aligned - above_at, "sgm_above_aligned")[-1],
+                            units, above_bits)
+        left = split_lanes(taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
+                           units, p.left_cost_bits)
         plan = register_plan(2, self.every, 0, True)
         totals = [build_sum(m, 1, [left[i], above[i]], plan) for i in range(units)]
         if p.fifth_path:
@@ -299,7 +294,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
                                        banks, address, write_count, written[name],
                                        self._valid_at(t.rows)))
-        (top, top_left), top_right = _lanes(words[0], 2, word_bits), words[1]
+        (top, top_left), top_right = split_lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.
         store = Store(m, "sgm_top_left_store", unsigned(word_bits), rounds)
         held = store.read(slots.round(word_at))
@@ -312,9 +307,9 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         results = {}
         for path in SGM_ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
-            word = _lanes(newest[path], units, bits)                   # round j + 1 at 6 + j
-            current = _lanes(register(m, newest[path], word_bits, f"{name}_current"),
-                             units, bits)                              # round j at 6 + j
+            word = split_lanes(newest[path], units, bits)                   # round j + 1 at 6 + j
+            current = split_lanes(register(m, newest[path], word_bits, f"{name}_current"),
+                                  units, bits)                              # round j at 6 + j
             plus = [register(m, v + p1, plus_bits, f"{name}_p{i}") for i, v in
                     enumerate(current)]                                # round j at 7 + j
             values = [register(m, v, bits, f"{name}_q{i}") for i, v in enumerate(current)]
@@ -379,8 +374,8 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         memory = line_memory(m, "sgm_minima", 3 * bits, p.width)
         m.d.comb += memory.read_addr.eq(register(m, Mux(x == p.width - 1, 0, x + 1),
                                                   range(p.width), "sgm_minima_address"))
-        word = dict(zip(SGM_ROW_PATHS, _lanes(register(m, memory.read_data, 3 * bits,
-                                                    "sgm_minima_word"), 3, bits)))
+        word = dict(zip(SGM_ROW_PATHS, split_lanes(register(m, memory.read_data, 3 * bits,
+                                                            "sgm_minima_word"), 3, bits)))
         # Column x + 1 for top-right now; for top as column x of the next position; for
         # top-left as column x - 1 two positions on.
         used = {path: Signal(bits, name=f"sgm_m_{path.replace('-', '_')}", reset_less=True)

@@ -41,7 +41,7 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import Store, bits_for, register, replica, taps
+from .common import Store, bits_for, register, replica, split_lanes, taps
 from .plan_timing import sgm_left_read_registered
 from .trees import build_tree, register_plan
 
@@ -222,7 +222,7 @@ def left_path(owner, m, fresh, p2):
         address = slots.round(loop) if rounds == 1 else \
             replica(m, slots.round(loop - 1), "sgm_left_read_round", reset_less=True)
         word = store.read(address)
-    centre = [word[i * bits:(i + 1) * bits] for i in range(units)]
+    centre = split_lanes(word, units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
     # keeps it + P1). Outside 0 .. D-1 the lane itself stands in: Lu(d) + P1 never beats

@@ -23,16 +23,12 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
 from .banks import line_memory
-from .common import SlotClock, bits_for, register, tag_layout, taps, y_range
+from .common import SlotClock, bits_for, register, split_lanes, tag_layout, taps, \
+    y_range
 from .plan_timing import sgm_fifth_timing, sgm_timing
 from .sgm_left import PathOwner, left_path
 
 __all__ = ["RightPathRecursion", "fifth_path"]
-
-
-def _lanes(word, count, bits):
-    """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
-    return [word[i * bits:(i + 1) * bits] for i in range(count)]
 
 
 class RightPathRecursion(PathOwner, wiring.Component):
@@ -81,7 +77,7 @@ class RightPathRecursion(PathOwner, wiring.Component):
         units = p.per_round
         costs = self.costs.as_value()
         # As deep as the SGM stage's taps need for the left path alone.
-        self._costs = [_lanes(word, units, p.cost_bits) for word in
+        self._costs = [split_lanes(word, units, p.cost_bits) for word in
                        taps(m, costs, max(t.loop + t.left_stages - 1, t.left_picks[-2] + 1),
                             "sgm_right_cost")]
         # Fresh start at the mirrored row's first column, and P2, slot-aligned at
@@ -171,7 +167,7 @@ def fifth_path(owner, m, four, p2_left):
                  right.tag.x.eq(owner._aligned(tag.x, 0, at, "sgm_fifth_x")),
                  right.tag.y.eq(owner._aligned(before, 0, at, "sgm_fifth_y")),
                  right.tag.valid.eq(owner._valid_at(at)), right.tag.live.eq(1)]
-    m.d.comb += [right.costs[i].eq(c) for i, c in enumerate(_lanes(stored, units, cost_bits))]
+    m.d.comb += [right.costs[i].eq(c) for i, c in enumerate(split_lanes(stored, units, cost_bits))]
     if adaptive:
         # The previous position's P2, held through the slot (loaded in its last clock).
         previous = Signal(p2_bits, name="sgm_fifth_p2_previous", reset_less=True)
@@ -184,8 +180,8 @@ def fifth_path(owner, m, four, p2_left):
     # S4 of the row before, at the mirrored column, waits for L_right.
     sums = _turnaround(owner, m, "sgm_fifth_four", units * four_bits, f.four - 1, column,
                        Cat(*(v[:four_bits] for v in four)))
-    sums = _lanes(taps(m, sums, f.right - f.four, "sgm_fifth_four_aligned")[-1], units,
-                  four_bits)
+    sums = split_lanes(taps(m, sums, f.right - f.four, "sgm_fifth_four_aligned")[-1], units,
+                       four_bits)
     total = [register(m, s + right.lanes[i], p.aggregated_cost_bits, f"sgm_fifth_s{i}")
              for i, s in enumerate(sums)]
     # Back into raster order through the last row buffer.
@@ -193,5 +189,5 @@ def fifth_path(owner, m, four, p2_left):
                       column, Cat(*total))
     centre = slots.delay(tag, 0, f.latency, "sgm_fifth_centre")
     y = owner._aligned(two_before, 0, f.latency, "sgm_fifth_centre_y")
-    lanes = _lanes(out, units, p.aggregated_cost_bits)
+    lanes = split_lanes(out, units, p.aggregated_cost_bits)
     return lanes, (centre.x, y, centre.valid, centre.live)
