@@ -20,7 +20,7 @@ from amaranth.lib import data
 from amaranth.lib.memory import Memory
 
 __all__ = ["bits_for", "tag_layout", "y_range", "pipe", "delay", "round_base", "SlotClock",
-           "Store", "column_inside", "better", "absolute_difference", "split_lanes"]
+           "Store", "ShiftStore", "column_inside", "better", "absolute_difference", "split_lanes"]
 
 
 def bits_for(maximum):
@@ -288,6 +288,33 @@ class Store:
             return
         self.m.d.comb += [self._write.addr.eq(address), self._write.data.eq(data),
                           self._write.en.eq(enable)]
+
+
+class ShiftStore:
+    """``depth`` words of registers that shift by one at every write: the oldest word is
+    read, always the same register, so no address and no multiplexer stand in front of it.
+
+    It stands in for a :class:`Store` whose word of round j is read exactly ``depth``
+    writes after it was written, which holds when writes come in round order and every
+    slot writes all of its rounds or none (a slot without a position writes nothing, so
+    the gaps between positions do not move the word read).
+    """
+
+    def __init__(self, m, name, shape, depth):
+        self.m = m
+        self._words = [Signal(shape, name=f"{name}{k}", reset_less=True) for k in range(depth)]
+
+    @property
+    def oldest(self):
+        """The word written ``depth`` writes ago."""
+        return self._words[-1]
+
+    def push(self, data, enable):
+        """At the clock edge when ``enable``: ``data`` in, every word one place older."""
+        with self.m.If(enable):
+            self.m.d.sync += [newer.eq(older) for newer, older
+                              in zip(self._words[1:], self._words[:-1])]
+            self.m.d.sync += self._words[0].eq(data)
 
 
 def column_inside(x, offset, width):

@@ -11,7 +11,7 @@ from .common import tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, store_slices,
                              vertical_bits, window_rows)
-from .plan_timing import core_timing, lr_timing
+from .plan_timing import core_timing, lr_timing, sgm_left_shift_store
 from .trees import DEFAULT_EVERY
 
 __all__ = ["MemoryUse", "memories", "memory_bits", "sgm_memories"]
@@ -90,9 +90,10 @@ def sgm_memories(params):
     Block RAM: the previous row's path costs, one word per (column, round) of D/R values,
     top and top-left in one memory (both read the position's own column), top-right in
     another (it reads the next column); the three paths' minima, one word per column.
-    LUT RAM (R > 1; registers at R = 1): the left path's Lu(x - 1, .) (D/R values of
-    ``left_loop_bits`` per round) and the first of them again (the neighbour across the next
-    round's edge), and the top-left words held for the next position. With the fifth path
+    LUT RAM (R > 1; registers at R = 1): the top-left words held for the next position, and
+    from R = 3 (shifting registers below, ``plan_timing.sgm_left_shift_store``) the left
+    path's Lu(x - 1, .) (D/R values of ``left_loop_bits`` per round) and the first of them
+    again (the neighbour across the next round's edge). With the fifth path
     (:mod:`.sgm_right`) its recursion's two stores again, and three rows of W R words in
     block RAM: the costs (and P2), S4 and S5.
     """
@@ -101,13 +102,14 @@ def sgm_memories(params):
     result = [MemoryUse("path rows (top, top-left)", 1, p.width * p.rounds, 2 * word),
               MemoryUse("path rows (top-right)", 1, p.width * p.rounds, word),
               MemoryUse("path minima", 1, p.width, 3 * p.path_cost_bits)]
-    if p.rounds > 1:
+    if not sgm_left_shift_store(p.rounds):
         # The fifth path's recursion has the left path's stores again.
         copies = 2 if p.fifth_path else 1
         result += [MemoryUse("left path store", copies, p.rounds,
                              p.per_round * p.left_loop_bits),
-                   MemoryUse("left path first lanes", copies, p.rounds, p.left_loop_bits),
-                   MemoryUse("top-left store", 1, p.rounds, word)]
+                   MemoryUse("left path first lanes", copies, p.rounds, p.left_loop_bits)]
+    if p.rounds > 1:
+        result.append(MemoryUse("top-left store", 1, p.rounds, word))
     if p.fifth_path:
         # hdl/sgm_right.py: a row of the costs (and the left path's P2 when adaptive), of
         # S4 and of S5, one word per (column, round).

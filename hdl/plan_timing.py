@@ -22,7 +22,7 @@ __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
            "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages",
-           "sgm_left_read_registered", "sgm_tree_clocks", "SgmTiming",
+           "sgm_left_read_registered", "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "FifthTiming", "sgm_fifth_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
@@ -214,6 +214,18 @@ def sgm_left_read_registered(rounds):
     and the + P1 in front of the comparisons were census 7x7 SGM's critical path at
     R = 10 (9.44 ns, 106 MHz)."""
     return sgm_left_stages(rounds) + 1 <= rounds - 1
+
+
+def sgm_left_shift_store(rounds):
+    """The left path's store in shifting registers (:class:`~.common.ShiftStore`) where its
+    update takes one clock (R <= 2): Lu(x, round j) is then written in the clock that reads
+    Lu(x - 1, round j), always the R-th write before, so the read is one register. In LUT
+    RAM at R = 2 the read address, the RAM's read, + P1, the comparisons, the choice and
+    the addition in one clock were census 5x5 SGM's critical path at 640 x 480, D = 64
+    (19.1 ns, 14 levels, 52.4 MHz). From R = 3 the update's clocks would move the word read
+    with the gaps between positions, and R words of LUT RAM cost less than R words of
+    flip-flops."""
+    return sgm_left_stages(rounds) == 1
 
 
 def sgm_tree_clocks(units):

@@ -7,14 +7,15 @@ values compared differs by less than 2^(n-1), so the sign bit of an n-bit differ
 orders them.
 
 **The loop.** Per lane, Lu(x, d) = C(x, d) + min(Lu(x-1, d), Lu(x-1, d +- 1) + P1,
-ref(x) + P2(x)); Lu(x-1, .) of round j is word j of a store of R words (a register at
-R = 1), the neighbour d - 1 across the round's lower edge is the last lane of the word the
-previous round read (registered), the neighbour d + 1 across the upper edge the first lane
-of word j + 1 (a store of its own). Round j + 1 of x - 1 is written R - 1 clocks (back to
-back) before round j of x reads it: one clock of logic at R <= 2, two at R = 3 (the
-comparisons, then the choice and the addition), three from R = 4 on (the comparisons, the
-choice, the addition; ``plan_timing.sgm_left_stages``). ref(x) + P2(x) is one register per group
-of lanes, constant through the slot: nothing inside the loop spans all D disparities.
+ref(x) + P2(x)); Lu(x-1, .) of round j is word j of a store of R words (shifting
+registers at R <= 2, LUT RAM above), the neighbour d - 1 across the round's lower edge
+is the last lane of the word the previous round read (registered), the neighbour d + 1
+across the upper edge the first lane of word j + 1 (a store of its own). Round j + 1 of
+x - 1 is written R - 1 clocks (back to back) before round j of x reads it: one clock of
+logic at R <= 2, two at R = 3 (the comparisons, then the choice and the addition), three
+from R = 4 on (the comparisons, the choice, the addition;
+``plan_timing.sgm_left_stages``). ref(x) + P2(x) is one register per group of lanes,
+constant through the slot: nothing inside the loop spans all D disparities.
 
 **The reference.** ref(x) = Lu(s, b) + C(s+1, b) + ... + C(x-1, b), s = max(x - J, 0),
 b = b(x) the argmin over d of Lu(max(x - K, 0), .):
@@ -41,8 +42,8 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import Store, bits_for, register, replica, split_lanes, taps
-from .plan_timing import sgm_left_read_registered
+from .common import ShiftStore, Store, bits_for, register, replica, split_lanes, taps
+from .plan_timing import sgm_left_read_registered, sgm_left_shift_store
 from .trees import build_tree, register_plan
 
 __all__ = ["PathOwner", "left_path"]
@@ -211,16 +212,21 @@ def left_path(owner, m, fresh, p2):
     sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
 
     # The loop: Lu(x - 1, .) of round j from the store at ``loop`` + j.
-    store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
+    shifting = sgm_left_shift_store(rounds)
+    if shifting:
+        store = ShiftStore(m, "sgm_left_store", unsigned(units * bits), rounds)
+    else:
+        store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
     early_read = sgm_left_read_registered(rounds)
-    if early_read:
+    if shifting:
+        word = store.oldest
+    elif early_read:
         word = register(m, store.read(slots.round(loop - 1)), units * bits, "sgm_left_word")
     else:
         # The store's own copy of the round counter: the shared one through the LUT RAM's
         # read, + P1 and the comparisons was census 5x5 SGM's critical path at 1280 x 720,
         # D = 64, R = 4 (9.92 ns). Round(loop) is round(loop - 1) a clock later.
-        address = slots.round(loop) if rounds == 1 else \
-            replica(m, slots.round(loop - 1), "sgm_left_read_round", reset_less=True)
+        address = replica(m, slots.round(loop - 1), "sgm_left_read_round", reset_less=True)
         word = store.read(address)
     centre = split_lanes(word, units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
@@ -236,9 +242,13 @@ def left_path(owner, m, fresh, p2):
         first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
         last_round = register(m, slots.round(loop - 1) == rounds - 1, 1,
                               "sgm_left_last_round")
-        firsts = Store(m, "sgm_left_firsts", unsigned(bits), rounds)
+        # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before.
+        firsts = ShiftStore(m, "sgm_left_firsts", unsigned(bits), rounds - 1) if shifting \
+            else Store(m, "sgm_left_firsts", unsigned(bits), rounds)
         # The round counter of a clock earlier reads j + 1 (mod R) in round j.
-        if early_read:
+        if shifting:
+            following = firsts.oldest
+        elif early_read:
             following = register(m, firsts.read(slots.round(loop - 2)), bits,
                                  "sgm_left_following")
         else:
@@ -271,12 +281,12 @@ def left_path(owner, m, fresh, p2):
     fresh_copies = _copies(m, fresh_at(last - 1), 1, units, "sgm_left_fresh_lane")
     new = [(c + Mux(f, 0, best))[:bits]
            for c, f, best in zip(costs[last], fresh_copies, lanes)]
-    store.write(slots.round(last), Cat(*new), owner._valid_at(last))
+    _write(store, slots.round(last), Cat(*new), owner._valid_at(last))
     if firsts is not None:
         # Lane 0's Lu + P1 from C + P1 (registered a clock before): one addition to the store.
         cost_plus = register(m, costs[last - 1][0] + p.p1, bits + 1, "sgm_left_cost_plus")
-        firsts.write(slots.round(last), (cost_plus + Mux(fresh_copies[0], 0, lanes[0]))[:bits],
-                     owner._valid_at(last))
+        _write(firsts, slots.round(last),
+               (cost_plus + Mux(fresh_copies[0], 0, lanes[0]))[:bits], owner._valid_at(last))
     lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
     # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
@@ -297,6 +307,14 @@ def left_path(owner, m, fresh, p2):
     delayed = [taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
     return [register(m, (v - Mux(fresh_out, 0, previous_m))[:p.left_cost_bits],
                       p.left_cost_bits, f"sgm_left_l{i}") for i, v in enumerate(delayed)]
+
+
+def _write(store, round_, data, enable):
+    """Write round ``round_``'s word: by its address, or into a shifting store in order."""
+    if isinstance(store, ShiftStore):
+        store.push(data, enable)
+    else:
+        store.write(round_, data, enable)
 
 
 def _reference(owner, m, column, m0, p2, chosen, sums):

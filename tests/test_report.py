@@ -129,6 +129,9 @@ MEMORY_SHAPES = [
                  lr_threshold=None, width=16, height=4),
     StereoParams(transform="census", block=3, disparities=6, rounds=6, aggregation="sgm",
                  p1=3, p2=20, width=8, height=4),
+    # R = 2: the left path's stores are shifting registers, not LUT RAM.
+    StereoParams(transform="census", block=3, disparities=4, rounds=2, aggregation="sgm",
+                 p1=3, p2=20, width=12, height=4),
     StereoParams(transform="census", block=3, disparities=4, rounds=2, aggregation=3,
                  width=16, height=4, line_buffer="pixels"),
     # The 3x3 median's two line buffers.
