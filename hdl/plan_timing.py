@@ -21,8 +21,8 @@ from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
-           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages",
-           "sgm_left_read_registered", "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
+           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages", "sgm_left_firsts_registered",
+           "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "FifthTiming", "sgm_fifth_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
@@ -208,12 +208,11 @@ def sgm_left_stages(rounds):
     return min(max(rounds - 1, 1), 3)
 
 
-def sgm_left_read_registered(rounds):
-    """The left path's store read a clock early into a register (from R = 5, where the
-    update's three clocks leave one of the R - 1): the round counter, the LUT RAM's read
-    and the + P1 in front of the comparisons were census 7x7 SGM's critical path at
-    R = 10 (9.44 ns, 106 MHz)."""
-    return sgm_left_stages(rounds) + 1 <= rounds - 1
+def sgm_left_firsts_registered(rounds):
+    """The store of the rounds' first lanes read a clock early into a register (from
+    R = 5): round j of x reads the first lane of round j + 1 of x - 1, written a clock
+    later than round j, so its early read needs stages + 1 <= R - 1."""
+    return not sgm_left_shift_store(rounds) and sgm_left_stages(rounds) + 1 <= rounds - 1
 
 
 def sgm_left_shift_store(rounds):
@@ -224,7 +223,9 @@ def sgm_left_shift_store(rounds):
     the addition in one clock were census 5x5 SGM's critical path at 640 x 480, D = 64
     (19.1 ns, 14 levels, 52.4 MHz). From R = 3 the update's clocks would move the word read
     with the gaps between positions, and R words of LUT RAM cost less than R words of
-    flip-flops."""
+    flip-flops; there Lu(x - 1, round j), written in clock T - R + j + stages - 1 for the
+    read of round j of x in clock T + j, is there two clocks early (stages + 1 <= R), and
+    the LUT RAM is read a clock early into a register."""
     return sgm_left_stages(rounds) == 1
 
 

@@ -43,7 +43,7 @@ from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import ShiftStore, Store, bits_for, register, replica, split_lanes, taps
-from .plan_timing import sgm_left_read_registered, sgm_left_shift_store
+from .plan_timing import sgm_left_firsts_registered, sgm_left_shift_store
 from .trees import build_tree, register_plan
 
 __all__ = ["PathOwner", "left_path"]
@@ -215,19 +215,15 @@ def left_path(owner, m, fresh, p2):
     shifting = sgm_left_shift_store(rounds)
     if shifting:
         store = ShiftStore(m, "sgm_left_store", unsigned(units * bits), rounds)
-    else:
-        store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
-    early_read = sgm_left_read_registered(rounds)
-    if shifting:
         word = store.oldest
-    elif early_read:
-        word = register(m, store.read(slots.round(loop - 1)), units * bits, "sgm_left_word")
     else:
-        # The store's own copy of the round counter: the shared one through the LUT RAM's
-        # read, + P1 and the comparisons was census 5x5 SGM's critical path at 1280 x 720,
-        # D = 64, R = 4 (9.92 ns). Round(loop) is round(loop - 1) a clock later.
-        address = replica(m, slots.round(loop - 1), "sgm_left_read_round", reset_less=True)
-        word = store.read(address)
+        # LUT RAM read a clock early into a register: Lu(x - 1, round j) was written in
+        # clock T - R + j + stages - 1 <= T + j - 2 (R >= 3). The round counter, the LUT
+        # RAM's read and + P1 in front of the comparisons were census 7x7 SGM's critical
+        # path at R = 10 (9.44 ns, 106 MHz), the read, + P1 and the comparisons census 5x5
+        # SGM's at 1280 x 720, D = 64, R = 4 (10.76 ns, 92.9 MHz).
+        store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
+        word = register(m, store.read(slots.round(loop - 1)), units * bits, "sgm_left_word")
     centre = split_lanes(word, units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
@@ -248,7 +244,7 @@ def left_path(owner, m, fresh, p2):
         # The round counter of a clock earlier reads j + 1 (mod R) in round j.
         if shifting:
             following = firsts.oldest
-        elif early_read:
+        elif sgm_left_firsts_registered(rounds):
             following = register(m, firsts.read(slots.round(loop - 2)), bits,
                                  "sgm_left_following")
         else:

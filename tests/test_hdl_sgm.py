@@ -146,11 +146,11 @@ STAGES = [
     ("census", 3, 8, 8, 3, 20, 2, 10, 5),            # one lane, R = D
     ("census", 3, 4, 1, 3, 20, 2, 22, 3),            # R = 1: four lanes, one clock a position
     ("census", 5, 8, 1, 16, 96, 4, 20, 3),           # R = 1, eight lanes (T = 3)
-    ("census", 5, 16, 2, 16, 96, 4, 20, 3),          # R = 2, eight lanes
+    ("census", 5, 16, 2, 16, 96, 4, 20, 3),          # R = 2, eight lanes, shifting stores
     ("census", 3, 24, 8, 4, 20, None, 26, 3),        # three lanes, constant P2
-    ("rank", 5, 15, 3, 7, 40, 5, 19, 3),             # R = 3, five lanes: the two-clock update
+    ("rank", 5, 15, 3, 7, 40, 5, 19, 3),             # R = 3: two-clock update, store read early
     ("census", 3, 8, 4, 3, 20, 2, 12, 3),            # R = 4: the three-clock update
-    ("rank", 3, 10, 5, 7, 40, 5, 14, 3),             # R = 5: the store's read registered
+    ("rank", 3, 10, 5, 7, 40, 5, 14, 3),             # R = 5: the first lanes' read registered
     ("ext-rank", 3, 12, 12, 0, 0, None, 14, 4),      # P1 = P2 = 0, 11-bit path costs
     ("ext-census", 3, 6, 2, 2000, 6151, 1, 21, 3),   # P2 = P2max, t = 1, wide Lu
 ]
