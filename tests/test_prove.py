@@ -29,11 +29,13 @@ def _argv(transform, out, *extra):
 
 
 @pytest.mark.parametrize("transform,aggregation", [
-    ("rank", "1"), ("census", "1"), ("ext-rank", "1"), ("ext-census", "1"), ("census", "sgm")])
+    ("rank", "1"), ("census", "1"), ("ext-rank", "1"), ("ext-census", "1"), ("census", "sgm"),
+    ("census", "sgm --fifth-path")])
 def test_unbounded_proofs_per_transform(transform, aggregation, tmp_path, capsys):
     # The bounded pre-pass only needs to run: its failures are test_broken_*'s.
+    aggregation, *options = aggregation.split()
     extra = ["--aggregation", aggregation, "--no-lr-check", "--checks", "induction",
-             "--depth", "4"]
+             "--depth", "4", *options]
     if aggregation == "sgm":
         # The narrowest SGM frame is 9 at D = 2, R = 2 (plan.sgm_min_width).
         extra += ["--p1", "2", "--p2", "5", "--rounds", "2", "--width", "9"]

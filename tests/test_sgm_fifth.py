@@ -280,12 +280,11 @@ def test_fifth_path_needs_sgm(capsys, tmp_path, pair_files, command):
                             "--fifth-path is an SGM option: it needs --aggregation sgm")
 
 
-def test_prove_refuses_the_fifth_path(capsys, tmp_path):
-    argv = ["prove", "--out", str(tmp_path / "o" / "prove"), "--block", "3", "--p2", "40",
-            "--aggregation", "sgm", "--fifth-path"]
+def test_prove_needs_sgm_for_the_fifth_path(capsys, tmp_path):
+    """``prove`` proves the fifth path (tests/test_prove.py), and refuses it without SGM."""
+    argv = ["prove", "--out", str(tmp_path / "o" / "prove"), "--block", "3", "--fifth-path"]
     assert_exact_user_error(capsys, tmp_path, argv,
-                            "--fifth-path: the fifth SGM path is not covered by npstereo "
-                            "prove yet (its properties are checked by simulation only)")
+                            "--fifth-path is an SGM option: it needs --aggregation sgm")
 
 
 def test_hardware_commands_build_the_fifth_path(capsys, tmp_path, pair_files):

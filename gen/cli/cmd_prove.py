@@ -28,9 +28,6 @@ DEFAULTS = {"block": 3, "disparities": 2, "rounds": 1}
 def run(args):
     out = check_output_folder(args.out)
     base = params_from_args(args)
-    if base.fifth_path:
-        raise UserError("--fifth-path: the fifth SGM path is not covered by npstereo prove "
-                        "yet (its properties are checked by simulation only)")
     width = base.first_valid_column + 1 if args.width is None else args.width
     params = base.with_size(width, args.height)
     check_buildable(params)
