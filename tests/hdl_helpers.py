@@ -148,6 +148,17 @@ def check_frames(params, pairs, beats, **kwargs):
     return result
 
 
+def simulate_and_compare(dut, testbench, got, expected, what):
+    """Run ``testbench`` on ``dut`` and compare every value it put into ``got`` (keyed by
+    index into ``expected``), which must be all of them."""
+    simulate(dut, testbench)
+    assert len(got) == expected.size, f"not every {what[:-1]} was compared"
+    mismatches = [(key, value, int(expected[key])) for key, value in sorted(got.items())
+                  if value != expected[key]]
+    assert not mismatches, (f"{len(mismatches)} {what} differ, first ((y, x, d), got, "
+                            f"expected): {mismatches[0]}")
+
+
 def decode_frames(words, params):
     """Split output words at ``first`` into H x W int16 maps (INVALID where not valid, -2
     where missing)."""

@@ -19,7 +19,6 @@ import random
 import numpy as np
 import pytest
 from amaranth.hdl import Value
-from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
 from npstereo.hdl import banks, calculation_stage, plan, plan_memories, plan_structure, \
@@ -29,7 +28,8 @@ from npstereo.hdl import sgm_left
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
 from npstereo.params import ParameterError, StereoParams
 
-from hdl_helpers import RESET, check_frames, choose_bank_early, frame_beats, record_memories
+from hdl_helpers import RESET, check_frames, choose_bank_early, frame_beats, record_memories, \
+    simulate_and_compare
 from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
@@ -130,15 +130,7 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
                         got[(y - late, x, j * units + i)] = ctx.get(dut.sums[i])
             await ctx.tick()
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(testbench)
-    sim.run()
-    assert len(got) == expected.size, "not every sum was compared"
-    mismatches = [(key, value, int(expected[key])) for key, value in sorted(got.items())
-                  if value != expected[key]]
-    assert not mismatches, (f"{len(mismatches)} sums differ, first ((y, x, d), got, "
-                            f"expected): {mismatches[0]}")
+    simulate_and_compare(dut, testbench, got, expected, "sums")
 
 
 STAGES = [

@@ -12,7 +12,6 @@ import random
 import numpy as np
 import pytest
 from amaranth.hdl import Const
-from amaranth.sim import Simulator
 
 from npstereo.golden import sgm as golden_sgm
 from npstereo.golden.pipeline import disparity_map
@@ -20,7 +19,7 @@ from npstereo.hdl import plan_timing, sgm_right
 from npstereo.hdl.sgm_right import RightPathRecursion
 from npstereo.params import StereoParams
 
-from hdl_helpers import RESET, check_frames, frame_beats
+from hdl_helpers import RESET, check_frames, frame_beats, simulate_and_compare
 from scenes import stereo_pair
 from test_hdl_plan import measured_flush, measured_period, planned_flush
 from test_hdl_sgm import check_stage, random_memories, stage_slots
@@ -84,15 +83,7 @@ def check_right(params, monkeypatch, seed, bubbles=0.3, mirrored=True, p2_of=Non
                     got[(y, column(x), j * units + i)] = ctx.get(dut.lanes[i])
             await ctx.tick()
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(testbench)
-    sim.run()
-    assert len(got) == expected.size, "not every value was compared"
-    mismatches = [(key, value, int(expected[key])) for key, value in sorted(got.items())
-                  if value != expected[key]]
-    assert not mismatches, (f"{len(mismatches)} values differ, first ((y, x, d), got, "
-                            f"expected): {mismatches[0]}")
+    simulate_and_compare(dut, testbench, got, expected, "values")
 
 
 CASES = [
