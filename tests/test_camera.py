@@ -9,6 +9,7 @@ import dataclasses
 import json
 
 import pytest
+from PIL import Image
 
 from npstereo.gen.cli.main import main
 from npstereo.gen.cli import cmd_report
@@ -69,8 +70,8 @@ def test_camera_table_gives_frames_and_evaluations_per_second():
 
 def test_camera_sweep_writes_its_documents(tmp_path, monkeypatch):
     """The sweep runs every configuration (here through a fake task runner: real synthesis
-    of 40 camera-sized cores takes hours) and writes camera.json and camera.md, not the
-    paper's sweep.json."""
+    of 40 camera-sized cores takes hours) and writes camera.json, camera.md and the
+    evaluations-per-second plot camera.png, not the paper's sweep.json."""
     seen = []
 
     def fake_sweep(configurations, targets, pnr, freq, timeout, cache, client, progress=None,
@@ -88,7 +89,10 @@ def test_camera_sweep_writes_its_documents(tmp_path, monkeypatch):
     assert main(["report", "--camera", "--target", "ecp5", "--pnr", "--no-cache",
                  "--out", str(tmp_path)]) == 0
     assert seen == camera_configurations()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["camera.json", "camera.md"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["camera.json", "camera.md",
+                                                          "camera.png"]
+    with Image.open(tmp_path / "camera.png") as plot:
+        assert plot.format == "PNG" and plot.height > 40 * 12   # 40 rows and 4 peers
     document = json.loads((tmp_path / "camera.json").read_text())
     assert len(document["reports"]) == len(seen)
     assert "| census 5x5 SGM | 1920x1080 | 64 | 1 |" in (tmp_path / "camera.md").read_text()

@@ -28,7 +28,7 @@ from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
     camera_configurations
 from ..reports.paper_data import PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_ROUNDS, PAPER_SIZE, \
     is_default_line_buffer, paper_configurations, sweep_targets
-from ..reports.plots import sweep_plots
+from ..reports.plots import camera_plot, sweep_plots
 from ..reports.synthesis import failed_report, lookup, store_report, synthesis_job
 from ..reports.tables import camera_markdown, format_table, sweep_markdown
 from .arguments import add_engine_arguments, add_hardware_arguments, \
@@ -168,7 +168,7 @@ def _write_sweep(reports, out, sweep="paper"):
     write_text(out / f"{name}.json", json.dumps(document, indent=1) + "\n")
     write_text(out / f"{name}.md", markdown(reports))
     written = [out / f"{name}.json", out / f"{name}.md"]
-    return written + (sweep_plots(reports, out) if sweep == "paper" else [])
+    return written + (sweep_plots if sweep == "paper" else camera_plot)(reports, out)
 
 
 def add_arguments(parser):

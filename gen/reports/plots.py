@@ -9,12 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ...params import TRANSFORMS
+from ...params import TRANSFORMS, StereoParams
 from ..atomic import atomic_path
 from ..images import colour_disparity
+from .camera import PEERS, evaluations_per_second
 from .paper_data import PAPER_BLOCKS, PAPER_CLOCK, PAPER_LOGIC, PAPER_MEMORY
 
-__all__ = ["save_figure", "plot_series", "disparity_grid", "sweep_plots", "pareto_plot"]
+__all__ = ["save_figure", "plot_series", "disparity_grid", "sweep_plots", "pareto_plot",
+           "camera_plot"]
 
 
 def _figure(**options):
@@ -242,3 +244,35 @@ def pareto_plot(path, points, labels, front, recommended, device, colour_key, co
     axes.set_title(title, fontsize=9)
     figure.tight_layout()
     save_figure(path, figure)
+
+
+def camera_plot(reports, out):
+    """``camera.png``: the disparity evaluations per second (W H D fps) of every camera
+    configuration placed and routed on the ECP5, beside the published peers, fastest on
+    top. Configurations without a routed clock are left out (camera.md says why)."""
+    bars = []
+    for report in reports:
+        p = StereoParams(**report["params"])
+        result = report["results"].get("ecp5") or {}
+        if result.get("status") == "ok" and result.get("frames_per_second"):
+            matcher = "SGM" if p.is_sgm else f"{p.aggregation}x{p.aggregation} box"
+            rate = evaluations_per_second(p.width, p.height, p.disparities,
+                                          result["frames_per_second"])
+            bars.append((f"census {p.block}x{p.block} {matcher}, {p.width}x{p.height}, "
+                         f"D={p.disparities}, R={p.rounds} ({result['fmax_mhz']:.0f} MHz)",
+                         rate / 1e9, "C0" if p.is_sgm else "C1"))
+    bars += [(f"{name}, {w}x{h}, D={d}", evaluations_per_second(w, h, d, fps) / 1e9, "0.6")
+             for name, w, h, d, fps in PEERS]
+    bars.sort(key=lambda bar: bar[1])
+    figure = _figure(figsize=(7.5, 0.32 * len(bars) + 1.2))
+    axes = figure.add_subplot()
+    y = np.arange(len(bars))
+    axes.barh(y, [rate for _, rate, _ in bars], color=[colour for _, _, colour in bars])
+    axes.set_yticks(y, [label for label, _, _ in bars], fontsize=7)
+    axes.set_xlabel("disparity evaluations per second (G, W x H x D x frames/s)")
+    axes.set_title("npstereo on the ECP5-85k (blue SGM, orange box) and published designs "
+                   "(gray)", fontsize=8)
+    axes.grid(axis="x", alpha=0.3)
+    path = Path(out) / "camera.png"
+    save_figure(path, figure)
+    return [path]
