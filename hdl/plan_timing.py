@@ -209,9 +209,12 @@ def sgm_left_stages(rounds):
 
 
 def sgm_left_firsts_registered(rounds):
-    """The store of the rounds' first lanes read a clock early into a register (from
-    R = 5): round j of x reads the first lane of round j + 1 of x - 1, written a clock
-    later than round j, so its early read needs stages + 1 <= R - 1."""
+    """Whether the store of the rounds' first lanes, read a clock early into a register,
+    always has the word (from R = 5). Round j of x reads the first lane of round j + 1 of
+    x - 1, written in clock T - R + j + stages (one later than round j), so the early read
+    needs stages + 1 <= R - 1. At R = 3, 4 (stages + 1 = R) the word is written in the
+    clock before the read whenever the slot before held a position: the stage then takes
+    it from the write's register instead."""
     return not sgm_left_shift_store(rounds) and sgm_left_stages(rounds) + 1 <= rounds - 1
 
 

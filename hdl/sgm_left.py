@@ -241,14 +241,22 @@ def left_path(owner, m, fresh, p2):
         # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before.
         firsts = ShiftStore(m, "sgm_left_firsts", unsigned(bits), rounds - 1) if shifting \
             else Store(m, "sgm_left_firsts", unsigned(bits), rounds)
-        # The round counter of a clock earlier reads j + 1 (mod R) in round j.
+        # The round counter two clocks earlier reads j + 1 (mod R) a clock before round j.
+        just_written = None
         if shifting:
             following = firsts.oldest
-        elif sgm_left_firsts_registered(rounds):
+        else:
             following = register(m, firsts.read(slots.round(loop - 2)), bits,
                                  "sgm_left_following")
-        else:
-            following = firsts.read(slots.round(loop - 1))
+        if not shifting and not sgm_left_firsts_registered(rounds):
+            # R = 3, 4: the word is written in the clock before its read when the slot
+            # before held a position, and a clock too late for the early read; it is then
+            # taken from the write's own register. Read through the LUT RAM at the round
+            # counter, it was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4
+            # (9.83 ns, 101.8 MHz).
+            just_written = Signal(bits, name="sgm_left_just_written", reset_less=True)
+            just_valid = Signal(name="sgm_left_just_valid")
+            following = Mux(just_valid, just_written, following)
         below = Mux(first_round, plus[0], before)
         above = Mux(last_round, plus[units - 1], following)
     else:
@@ -281,8 +289,10 @@ def left_path(owner, m, fresh, p2):
     if firsts is not None:
         # Lane 0's Lu + P1 from C + P1 (registered a clock before): one addition to the store.
         cost_plus = register(m, costs[last - 1][0] + p.p1, bits + 1, "sgm_left_cost_plus")
-        _write(firsts, slots.round(last),
-               (cost_plus + Mux(fresh_copies[0], 0, lanes[0]))[:bits], owner._valid_at(last))
+        first = (cost_plus + Mux(fresh_copies[0], 0, lanes[0]))[:bits]
+        _write(firsts, slots.round(last), first, owner._valid_at(last))
+        if just_written is not None:
+            m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
     lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
     # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
