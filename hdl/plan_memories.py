@@ -92,8 +92,8 @@ def sgm_memories(params):
     another (it reads the next column); the three paths' minima, one word per column.
     LUT RAM (R > 1; registers at R = 1): the top-left words held for the next position, and
     from R = 3 (shifting registers below, ``plan_timing.sgm_left_shift_store``) the left
-    path's Lu(x - 1, .) (D/R values of ``left_loop_bits`` per round) and the first of them
-    again (the neighbour across the next round's edge). With the fifth path
+    path's Lu(x - 1, .) and Lu(x - 1, .) + P1 (2 D/R values of ``left_loop_bits`` per
+    round) and the first of them + P1 again (the neighbour across the next round's edge). With the fifth path
     (:mod:`.sgm_right`) its recursion's two stores again, and three rows of W R words in
     block RAM: the costs (and P2), S4 and S5.
     """
@@ -106,7 +106,7 @@ def sgm_memories(params):
         # The fifth path's recursion has the left path's stores again.
         copies = 2 if p.fifth_path else 1
         result += [MemoryUse("left path store", copies, p.rounds,
-                             p.per_round * p.left_loop_bits),
+                             2 * p.per_round * p.left_loop_bits),
                    MemoryUse("left path first lanes", copies, p.rounds, p.left_loop_bits)]
     if p.rounds > 1:
         result.append(MemoryUse("top-left store", 1, p.rounds, word))

@@ -212,9 +212,12 @@ def left_path(owner, m, fresh, p2):
     sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
 
     # The loop: Lu(x - 1, .) of round j from the store at ``loop`` + j.
+    # A word holds Lu and Lu + P1 of every lane (the + P1 added beside Lu, outside the
+    # loop's path: the word's read, + P1 and the comparisons were census 7x7 SGM's
+    # critical path at R = 10, 6.70 ns, nine levels).
     shifting = sgm_left_shift_store(rounds)
     if shifting:
-        store = ShiftStore(m, "sgm_left_store", unsigned(units * bits), rounds)
+        store = ShiftStore(m, "sgm_left_store", unsigned(2 * units * bits), rounds)
         word = store.oldest
     else:
         # LUT RAM read a clock early into a register: Lu(x - 1, round j) was written in
@@ -222,16 +225,16 @@ def left_path(owner, m, fresh, p2):
         # RAM's read and + P1 in front of the comparisons were census 7x7 SGM's critical
         # path at R = 10 (9.44 ns, 106 MHz), the read, + P1 and the comparisons census 5x5
         # SGM's at 1280 x 720, D = 64, R = 4 (10.76 ns, 92.9 MHz).
-        store = Store(m, "sgm_left_store", unsigned(units * bits), rounds)
-        word = register(m, store.read(slots.round(loop - 1)), units * bits, "sgm_left_word")
-    centre = split_lanes(word, units, bits)
+        store = Store(m, "sgm_left_store", unsigned(2 * units * bits), rounds)
+        word = register(m, store.read(slots.round(loop - 1)), 2 * units * bits,
+                        "sgm_left_word")
+    centre, plus = split_lanes(word, units, bits), split_lanes(word[units * bits:], units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
     # keeps it + P1). Outside 0 .. D-1 the lane itself stands in: Lu(d) + P1 never beats
     # Lu(d). The edge flags come from the round counters of a clock earlier, registered:
     # the counter, the store's read and the comparisons in one clock were census 7x7 SGM's
     # critical path at R = 10 (10.6 ns).
-    plus = [(c + p.p1)[:bits] for c in centre]
     before = register(m, plus[units - 1], bits, "sgm_left_before")
     firsts = None
     if rounds > 1:
@@ -285,11 +288,14 @@ def left_path(owner, m, fresh, p2):
     fresh_copies = _copies(m, fresh_at(last - 1), 1, units, "sgm_left_fresh_lane")
     new = [(c + Mux(f, 0, best))[:bits]
            for c, f, best in zip(costs[last], fresh_copies, lanes)]
-    _write(store, slots.round(last), Cat(*new), owner._valid_at(last))
+    # Lu + P1 from C + P1 (registered a clock before): one addition to the store, as Lu's.
+    costs_plus = [register(m, c + p.p1, bits + 1, f"sgm_left_cost_plus{i}")
+                  for i, c in enumerate(costs[last - 1])]
+    new_plus = [(c + Mux(f, 0, best))[:bits]
+                for c, f, best in zip(costs_plus, fresh_copies, lanes)]
+    _write(store, slots.round(last), Cat(*new, *new_plus), owner._valid_at(last))
     if firsts is not None:
-        # Lane 0's Lu + P1 from C + P1 (registered a clock before): one addition to the store.
-        cost_plus = register(m, costs[last - 1][0] + p.p1, bits + 1, "sgm_left_cost_plus")
-        first = (cost_plus + Mux(fresh_copies[0], 0, lanes[0]))[:bits]
+        first = new_plus[0]
         _write(firsts, slots.round(last), first, owner._valid_at(last))
         if just_written is not None:
             m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]

@@ -368,13 +368,13 @@ def test_rounds_not_dividing_d_are_refused():
 
 def test_sgm_memories_within_the_budget():
     """At 450 x 375, D = 100, R = 10 with the defaults: 3 x 450 x 100 x 7 bits of path
-    costs, 3 x 450 x 7 of minima, the left path's store of 10 words of 10 x 11 bits and
-    its first lanes, the top-left store, and all of SGM's memory beside the box
+    costs, 3 x 450 x 7 of minima, the left path's store of 10 words of 10 x 11 bits (Lu)
+    and 10 x 11 (Lu + P1) and its first lanes, the top-left store, and all of SGM's memory beside the box
     configuration's under 1 Mibit."""
     params = sgm_params("census", 7, 100, 10, width=450, height=375)
     kinds = {memory.name: memory.bits for memory in plan_memories.sgm_memories(params)}
     assert kinds == {"path rows (top, top-left)": 630_000, "path rows (top-right)": 315_000,
-                     "path minima": 9_450, "left path store": 1_100,
+                     "path minima": 9_450, "left path store": 2_200,
                      "left path first lanes": 110, "top-left store": 700}
     box = params.replace(aggregation=3, p1=None, p2=None, p2_adapt=None)
     assert plan_memories.memory_bits(params) - plan_memories.memory_bits(box) < 1 << 20
