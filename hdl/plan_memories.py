@@ -38,13 +38,16 @@ class MemoryUse:
     """One kind of memory of the core: ``count`` memories of ``depth`` words of ``width``
     bits, and what holds them (a use of memory, not Amaranth's ``Memory``): how they are
     read (:data:`SYNC`, :data:`ASYNC`, :data:`BLOCK`) and cut (:data:`WHOLE`,
-    :data:`LINES`, :data:`BANKED`)."""
+    :data:`LINES`, :data:`BANKED`); ``ordered``: a read in the clock of a write to its
+    address must give the old word (no ``no_rw_check``: Amaranth's FIFO), which synthesis
+    emulates in front of a block RAM."""
     name: str
     count: int
     depth: int
     width: int
     read: str = SYNC
     layout: str = WHOLE
+    ordered: bool = False
 
     @property
     def bits(self):
@@ -97,7 +100,7 @@ def memories(params, every=DEFAULT_EVERY):
         result += [MemoryUse("median row", 1, p.width, bits + 6, layout=LINES),
                    MemoryUse("median row above", 1, p.width, bits + 1, layout=LINES)]
     depth = core_timing(p, every).queue_depth
-    result.append(MemoryUse("output queue", 1, depth - 1, output_width(p) + 2))
+    result.append(MemoryUse("output queue", 1, depth - 1, output_width(p) + 2, ordered=True))
     return result
 
 
@@ -123,10 +126,10 @@ def built_memories(params, every=DEFAULT_EVERY):
         else:
             pieces = [(use.depth, use.width)]
         for depth, width in pieces:
-            key = (use.name, depth, width, use.read)
+            key = (use.name, depth, width, use.read, use.ordered)
             found[key] = found.get(key, 0) + use.count
-    return [MemoryUse(name, count, depth, width, read)
-            for (name, depth, width, read), count in found.items()]
+    return [MemoryUse(name, count, depth, width, read, ordered=ordered)
+            for (name, depth, width, read, ordered), count in found.items()]
 
 
 def sgm_memories(params):

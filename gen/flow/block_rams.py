@@ -14,8 +14,12 @@ estimate finds cheapest (Yosys 0.70, ``passes/memory/memory_libmap.cc`` with
   ranges' bits packed into ``ceil(ranges * padded / bits)`` cells (a block's byte enables
   write one range's bytes beside another's);
 - plus half a point per bit of the read multiplexer among the ranges and per range of the
-  write decoder, and the emulation Yosys adds (a point for the read port that does not
-  share the write port's address, doubled).
+  write decoder, and twice the emulation score: a point for the read port that does not
+  share the write port's address, and in front of a block RAM six more for a memory whose
+  reads must see the old word when its address is written in the same clock (a DP16KD's
+  two ports do not order them: read-first emulation, 3 points, and transparency, 3);
+  the output queue's (Amaranth's FIFO) is one, and at 127 x 10 that keeps it in LUT
+  RAM.
 
 A memory read combinationally (``common.Store``) cannot be a DP16KD; one with
 ``ram_style = "block"`` (the L/R check's) always is. The count is checked against Yosys's
@@ -39,8 +43,9 @@ _LUT_RAM_SHAPE = (16, 4)
 #: shapes at least that wide.
 _BYTE = 9
 #: memory_libmap's FACTOR_MUX and FACTOR_DEMUX, and FACTOR_EMU times the emulation score of
-#: a read port not shared with the write port.
-_MUX, _DEMUX, _EMULATION = 0.5, 0.5, 2
+#: a read port not shared with the write port (1), and of the read-first and transparency
+#: logic an ordered read needs in front of a block RAM (3 + 3).
+_MUX, _DEMUX, _EMULATION, _ORDER_EMULATION = 0.5, 0.5, 2, 12
 
 
 def _cost(depth, width, words, bits, cell_cost, byte):
@@ -56,15 +61,18 @@ def _cost(depth, width, words, bits, cell_cost, byte):
     return cost, cells
 
 
-def block_rams(depth, width, read="sync", rom=False):
+def block_rams(depth, width, read="sync", rom=False, ordered=False):
     """DP16KD that Yosys maps one memory of ``depth`` words of ``width`` bits to: 0 when
     LUT RAM or flip-flops cost less (or it is read combinationally, ``read`` ASYNC), the
     cells of its cheapest block shape otherwise (always with ``read`` BLOCK). ``rom``: no
-    write port (flip-flops then cost 1/16 per bit, and LUT RAM is not used for ROMs)."""
+    write port (flip-flops then cost 1/16 per bit, and LUT RAM is not used for ROMs);
+    ``ordered``: its reads keep their order with a write to the same address
+    (:class:`~npstereo.hdl.plan_memories.MemoryUse`)."""
     if read == ASYNC:
         return 0
     cost, cells = min(_cost(depth, width, words, bits, _BLOCK_COST, _BYTE)
                       for words, bits in BLOCK_RAM_SHAPES)
+    cost += _ORDER_EMULATION if ordered else 0
     if read == BLOCK:
         return cells
     # memory_libmap compares with the flip-flops' cost truncated to an integer, and keeps
@@ -78,5 +86,5 @@ def block_rams(depth, width, read="sync", rom=False):
 def core_block_rams(params):
     """DP16KD of the core for ``params`` (with width and height): :func:`block_rams` of each
     memory it instantiates."""
-    return sum(use.count * block_rams(use.depth, use.width, use.read)
+    return sum(use.count * block_rams(use.depth, use.width, use.read, ordered=use.ordered)
                for use in built_memories(params))
