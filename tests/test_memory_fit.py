@@ -341,7 +341,8 @@ def test_built_memories_are_the_ones_the_hdl_makes(params):
 
 def test_a_count_that_forgets_a_memory_kind_is_caught(monkeypatch):
     """Broken variant: the fifth path's S5 row left out of the list. The shapes no longer
-    match the elaborated core's, and the issue's 720p core drops under the 85k's blocks."""
+    match the elaborated core's, the issue's 720p core counts fewer blocks, and the two
+    fifth-path cores measured by Yosys no longer get its count."""
     params = SHAPED[2]
     whole = plan_memories.memories
 
@@ -350,6 +351,8 @@ def test_a_count_that_forgets_a_memory_kind_is_caught(monkeypatch):
     monkeypatch.setattr(plan_memories, "memories", forgetful)
     assert _listed_shapes(plan_memories.built_memories(params)) != _elaborated_shapes(params)
     assert core_block_rams(FIFTH_720P) < 315
+    assert [p for p, measured in MEASURED_BY_YOSYS if core_block_rams(p) != measured] == [
+        MEASURED_BY_YOSYS[4][0], MEASURED_BY_YOSYS[5][0]]
 
 
 def test_block_shapes_as_yosys_chooses_them():
@@ -386,3 +389,30 @@ def test_explorer_refuses_the_fifth_path_at_720p_at_once(monkeypatch, nothing_bu
     result = plan.synthesis[1]["results"]["ecp5"]
     assert result["message"] == "does not fit (memory 151 %)"
     assert result["expected_block_rams"] == 315 and result["synthesised"] is False
+
+
+#: DP16KD that Yosys 0.70's synth_ecp5 mapped these cores to, measured by hand with
+#: ``gen.reports.synthesis.synthesis_report(params, ["ecp5"])`` (docs/resources.md, "Block RAM
+#: before synthesis"; 1-4 min each, not in ``make test``). An HDL change that moves a count
+#: must be measured again and this table and the document's updated.
+C5 = dict(transform="census", block=5)
+MEASURED_BY_YOSYS = [
+    (StereoParams(**C5, disparities=16, rounds=1, width=640, height=48), 8),
+    (StereoParams(**C5, disparities=16, rounds=4, width=640, height=48, line_buffer="costs",
+                  median=True), 28),
+    (StereoParams(**C5, disparities=32, rounds=4, width=1280, height=48,
+                  line_buffer="transforms"), 21),
+    (StereoParams(**C5, disparities=16, rounds=1, aggregation="sgm", width=640, height=48), 29),
+    (StereoParams(**C5, disparities=16, rounds=4, aggregation="sgm", fifth_path=True,
+                  width=640, height=48), 51),
+    (StereoParams(**C5, disparities=16, rounds=1, aggregation="sgm", fifth_path=True,
+                  median=True, cost_term="ad3", width=640, height=48), 55),
+    (StereoParams(**C5, disparities=16, rounds=2, aggregation="sgm", cost_term="ad3",
+                  subpixel_bits=4, width=1280, height=48), 41),
+]
+
+
+@pytest.mark.parametrize("params, measured", MEASURED_BY_YOSYS,
+                         ids=[p.describe() for p, _ in MEASURED_BY_YOSYS])
+def test_block_count_is_what_yosys_measured(params, measured):
+    assert core_block_rams(params) == measured
