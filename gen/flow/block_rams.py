@@ -8,7 +8,7 @@ estimate finds cheapest (Yosys 0.70, ``passes/memory/memory_libmap.cc`` with
 
 - flip-flops cost one per bit (1/16 for a ROM) and win a tie;
 - a DP16KD (or its 36-bit simple dual-port mode, PDPW16KD) costs 128 and a TRELLIS_DPR16X4
-  (16 x 4, combinational read, so only its RAMs' reads are registered after it) 4, each
+  (16 x 4, read combinationally: a registered read gets its register behind it) 4, each
   times the cells of the cheapest shape: ``ceil(depth / words)`` address ranges side by
   side, the word padded to whole 9-bit bytes where a block's width is 9 or more, and the
   ranges' bits packed into ``ceil(ranges * padded / bits)`` cells (a block's byte enables
@@ -28,7 +28,7 @@ for the configurations of docs/resources.md, "Block RAM before synthesis".
 
 import math
 
-from ...hdl.plan_memories import ASYNC, BLOCK, built_memories
+from ...hdl.plan_memories import ASYNC, BLOCK, SYNC, built_memories
 
 __all__ = ["BLOCK_RAM_SHAPES", "block_rams", "core_block_rams"]
 
@@ -61,7 +61,7 @@ def _cost(depth, width, words, bits, cell_cost, byte):
     return cost, cells
 
 
-def block_rams(depth, width, read="sync", rom=False, ordered=False):
+def block_rams(depth, width, read=SYNC, rom=False, ordered=False):
     """DP16KD that Yosys maps one memory of ``depth`` words of ``width`` bits to: 0 when
     LUT RAM or flip-flops cost less (or it is read combinationally, ``read`` ASYNC), the
     cells of its cheapest block shape otherwise (always with ``read`` BLOCK). ``rom``: no

@@ -233,8 +233,7 @@ def fit_message(utilisation):
 
 
 def memory_fit_message(bits, dev, block_rams=None):
-    """``None`` when ``dev`` holds the core's memories, else ``"does not fit (memory 112
-    %)"``.
+    """``None`` when ``dev`` holds the core's memories, else "does not fit (memory 112 %)".
 
     ``bits`` are the architecture's (:func:`npstereo.hdl.plan_memories.memory_bits`), a
     lower bound of the RAM its memories take (a block RAM holds its full bits only at its
