@@ -96,6 +96,8 @@ def test_explore_fifth_path_and_cost_term_through_the_command(tmp_path):
         expected = evaluate(match_images(left, right, params), pair.ground_truth, 16)
         assert {k: point["quality"]["clean"][k] for k in QUALITY_FIGURES} == \
             expected.as_dict()
+    # Each option is scored with it on: the four maps differ.
+    assert len({point["quality"]["clean"]["correct"] for point in points}) == 4
     text = (out / "explore.md").read_text()
     assert "| census 5x5 R=2 A=sgm +ad3 fifth path |" in text
     assert text.count("does not fit (memory 198 %)") == 2
