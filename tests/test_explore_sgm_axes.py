@@ -12,7 +12,9 @@ import pytest
 
 from npstereo.gen.cli.cmd_explore import _short_labels
 from npstereo.gen.cli.main import main
-from npstereo.gen.explore.explorer import Grid, _label, configurations
+from npstereo.gen.explore import explorer
+from npstereo.gen.explore.explorer import Grid, _label, configurations, plan_tasks
+from npstereo.gen.flow.capacity import DEVICES
 from npstereo.gen.matching import match_images
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
@@ -101,3 +103,25 @@ def test_explore_fifth_path_and_cost_term_through_the_command(tmp_path):
     text = (out / "explore.md").read_text()
     assert "| census 5x5 R=2 A=sgm +ad3 fifth path |" in text
     assert text.count("does not fit (memory 198 %)") == 2
+
+
+def test_each_option_is_a_quality_task_of_its_own(monkeypatch):
+    """The quality key holds the SGM options: the four combinations are four golden-model
+    tasks. Broken variant: a key without them (the options dropped before the golden model
+    runs) makes the four two tasks (the ad3 ones keep their P2 of 72), and the dask test
+    above would find their maps equal in pairs."""
+    grid = Grid(("census",), (5,), (2,), ("sgm",), ("auto",), 16, 2048, 16,
+                fifth_paths=(False, True), cost_terms=(None, "ad3"))
+    configs, _ = configurations(grid)
+    pair = synthetic_pair(64, 16, 16, seed=0)
+    scenes = {"clean": (*pair.gray(), pair.ground_truth)}
+    dev = DEVICES["ecp5-25k"]
+
+    def quality_tasks():
+        plan = plan_tasks(configs, scenes, dev, False, 150.0, None, None, None)
+        return [t for t in plan.tasks if t.label.startswith("quality")]
+    assert len(quality_tasks()) == 4
+    golden = explorer._golden
+    monkeypatch.setattr(explorer, "_golden", lambda params: golden(
+        params.replace(fifth_path=False, cost_term=None)))
+    assert len(quality_tasks()) == 2
