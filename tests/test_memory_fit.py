@@ -341,7 +341,7 @@ def test_built_memories_are_the_ones_the_hdl_makes(params):
 
 def test_a_count_that_forgets_a_memory_kind_is_caught(monkeypatch):
     """Broken variant: the fifth path's S5 row left out of the list. The shapes no longer
-    match the elaborated core's, the issue's 720p core counts fewer blocks, and the two
+    match the elaborated core's, the issue's 720p core counts fewer blocks, and the
     fifth-path cores measured by Yosys no longer get its count."""
     params = SHAPED[2]
     whole = plan_memories.memories
@@ -352,7 +352,7 @@ def test_a_count_that_forgets_a_memory_kind_is_caught(monkeypatch):
     assert _listed_shapes(plan_memories.built_memories(params)) != _elaborated_shapes(params)
     assert core_block_rams(FIFTH_720P) < 315
     assert [p for p, measured in MEASURED_BY_YOSYS if core_block_rams(p) != measured] == [
-        MEASURED_BY_YOSYS[4][0], MEASURED_BY_YOSYS[5][0]]
+        p for p, _ in MEASURED_BY_YOSYS if p.fifth_path]
 
 
 def test_block_shapes_as_yosys_chooses_them():
@@ -409,6 +409,10 @@ MEASURED_BY_YOSYS = [
                   median=True, cost_term="ad3", width=640, height=48), 55),
     (StereoParams(**C5, disparities=16, rounds=2, aggregation="sgm", cost_term="ad3",
                   subpixel_bits=4, width=1280, height=48), 41),
+    (StereoParams(**C5, disparities=64, rounds=4, aggregation="sgm", width=1280,
+                  height=720), 109),
+    (StereoParams(transform="census", block=7, disparities=64, rounds=4, aggregation="sgm",
+                  fifth_path=True, cost_term="ad3", median=True, width=640, height=480), 181),
 ]
 
 
