@@ -287,7 +287,7 @@ def test_grid_order_and_aggregation_values_pass_through():
                                          8, 32, 8))
     assert [(p.block, p.aggregation) for p in mixed] == [(3, 3), (7, 3), (7, "sgm")]
     assert len(skipped) == 1 and skipped[0].startswith(
-        "('census', 3, 8, 'sgm', 'auto', False, 0): P2")
+        "('census', 3, 8, 'sgm', 'auto', False, 0, False, None): P2")
     # A value that no combination takes is an error of its own.
     with pytest.raises(ParameterError, match="P2 must be <= 55"):
         configurations(Grid(("census",), (3,), (8,), (3, "sgm"), ("auto",), 8, 32, 8))
@@ -422,8 +422,8 @@ def test_explore_with_median_and_fraction(capsys, tmp_path):
 
 
 def test_plot_labels_name_the_varying_output_options():
-    from npstereo.gen.cli.cmd_explore import _medians, _short_labels
-    assert (_medians(None), _medians([]), _medians(["off", "on"])) == (
+    from npstereo.gen.cli.cmd_explore import _on_off, _short_labels
+    assert (_on_off(None), _on_off([]), _on_off(["off", "on"])) == (
         (False,), (True,), (False, True))
     chosen, _ = configurations(Grid(("census",), (3,), (2,), (3,), ("auto",), 8, 32, 8,
                                     medians=(False, True), subpixel_bits=(0, 4)))
@@ -443,3 +443,4 @@ def test_plot_of_a_grid_whose_every_synthesis_failed(tmp_path):
     pareto_plot(path, points, ["rank 3"], [], None, DEVICES["cyclonev-a9"], "logic_levels",
                 "LUT levels", "every synthesis failed")
     assert Image.open(path).size[0] > 600
+

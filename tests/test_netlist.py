@@ -19,6 +19,7 @@ import pytest
 
 from npstereo.gen.cli.main import main
 from npstereo.gen.flow import bram_output_register as outreg
+from npstereo.gen.flow.block_rams import core_block_rams
 from npstereo.gen.flow.netlist import mapped_netlist, netlist_verilog
 from npstereo.hdl.verilog import TOP_NAME, core_verilog
 from npstereo.params import StereoParams
@@ -80,6 +81,9 @@ def test_netlist_bit_exact(name):
     if family == "ecp5":
         # The pass under test did something: read ports were given their output register.
         assert netlist.figures["outreg_packed"] >= 1, netlist.figures
+        # The DP16KD counted before synthesis (issue 27's refusal) are Yosys's: the L/R
+        # check's two in block RAM, the small line buffers in LUT RAM.
+        assert netlist.figures["block_rams"] == core_block_rams(params) == 2
 
 
 def test_register_dropping_pass_fails(tmp_path, monkeypatch):

@@ -16,7 +16,7 @@ from pathlib import Path
 from ...golden.data import load_middlebury
 from ...golden.synthetic import synthetic_pair
 from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES
-from ...params import LINE_BUFFERS, MAX_SUBPIXEL_BITS, TRANSFORMS, UserError
+from ...params import COST_TERMS, LINE_BUFFERS, MAX_SUBPIXEL_BITS, TRANSFORMS, UserError
 from ..atomic import write_text
 from ..explore.engine import check_engine_arguments, cluster
 from ..explore.explorer import Grid, configurations, explore
@@ -44,11 +44,17 @@ def _aggregation(text):
         return text
 
 
-def _medians(values):
-    """The median axis: off without ``--median``, on with the bare flag, else as listed."""
+def _on_off(values):
+    """An off/on axis (``--median``, ``--fifth-path``): off without the option, on with the
+    bare flag, else as listed."""
     if values is None:
         return (False,)
     return tuple(value == "on" for value in values) if values else (True,)
+
+
+def _cost_terms(values):
+    """The cost-term axis: ``none`` is the census cost alone (None)."""
+    return tuple(None if value == "none" else value for value in values)
 
 
 def conditions(noise, bayer, seed):
@@ -150,13 +156,17 @@ def explore_markdown(document):
 def _short_labels(points):
     """Labels of only the axes that vary across the grid (transform and block always)."""
     params = [p["params"] for p in points]
-    varying = [key for key in ("rounds", "aggregation", "line_buffer", "median",
-                               "subpixel_bits") if len({p[key] for p in params}) > 1]
+    varying = [key for key in ("rounds", "aggregation", "line_buffer", "cost_term",
+                               "fifth_path", "median", "subpixel_bits")
+               if len({p[key] for p in params}) > 1]
     short = {"rounds": "R", "aggregation": "A", "line_buffer": "", "subpixel_bits": "F"}
+    switches = {"median": ("median", "no median"), "fifth_path": ("5 paths", "4 paths")}
 
     def value(p, key):
-        if key == "median":
-            return "median" if p[key] else "no median"
+        if key in switches:
+            return switches[key][0] if p[key] else switches[key][1]
+        if key == "cost_term":
+            return f"+{p[key]}" if p[key] else "no term"
         return f"{short[key]}{'=' if short[key] else ''}{p[key]}"
     return [" ".join([p["transform"], str(p["block"])] + [value(p, k) for k in varying])
             for p in params]
@@ -203,8 +213,10 @@ def run(args):
                 line_buffers=tuple(args.line_buffer), disparities=args.disparities,
                 width=args.width, height=args.height,
                 lr_threshold=None if args.no_lr_check else args.lr_threshold,
-                lut_inputs=dev.lut_inputs, medians=_medians(args.median),
-                subpixel_bits=tuple(args.subpixel_bits))
+                lut_inputs=dev.lut_inputs, medians=_on_off(args.median),
+                subpixel_bits=tuple(args.subpixel_bits),
+                fifth_paths=_on_off(args.fifth_path),
+                cost_terms=_cost_terms(args.cost_term))
     configs, skipped = configurations(grid)
     pair = (synthetic_pair(args.width, args.height, args.disparities, args.seed)
             if args.synthetic else load_middlebury(args.dataset))
@@ -268,6 +280,17 @@ def add_arguments(parser):
                         help="the 3x3 median of the output (docs/semantics.md): --median "
                              "alone puts it on every configuration, --median off on "
                              "compares both (default off)")
+    parser.add_argument("--fifth-path", nargs="*", choices=("off", "on"),
+                        help="SGM's fifth path, right to left along the row (docs/sgm.md; "
+                             "needs sgm among the --aggregation values, box configurations "
+                             "are taken once without it): --fifth-path alone puts it on "
+                             "every SGM configuration, --fifth-path off on compares both "
+                             "(default off)")
+    parser.add_argument("--cost-term", nargs="*", choices=("none", *COST_TERMS),
+                        default=["none"],
+                        help=f"terms added to the census cost of the SGM configurations: "
+                             f"none or {', '.join(COST_TERMS)} (docs/semantics.md); "
+                             f"--cost-term none ad3 compares both (default none)")
     parser.add_argument("--subpixel-bits", nargs="*", type=int, metavar="F",
                         default=[STEREO_DEFAULTS["subpixel_bits"]],
                         help=f"fractional bits F of the grid, 0 .. {MAX_SUBPIXEL_BITS}; "

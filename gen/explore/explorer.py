@@ -36,7 +36,7 @@ import numpy as np
 from ...golden.quality import evaluate as quality_of, mean_absolute_error
 from ...hdl.plan import check_buildable
 from ...hdl.plan_timing import cycles_per_frame
-from ...params import ParameterError, StereoParams, UserError
+from ...params import SGM, ParameterError, StereoParams, UserError
 from ..atomic import OutputError
 from ..flow.capacity import DEFAULT_DEVICE, device as find_device, fit_message, usage, \
     utilisation
@@ -75,18 +75,28 @@ class Grid:
     #: The output options' axes: the 3x3 median off and/or on, fractional bits F.
     medians: tuple = (False,)
     subpixel_bits: tuple = (0,)
+    #: SGM's quality options' axes: the fifth path off and/or on, the cost terms (None:
+    #: the census cost alone).
+    fifth_paths: tuple = (False,)
+    cost_terms: tuple = (None,)
 
     _AXES = (("transforms", "--transform"), ("blocks", "--block"), ("rounds", "--rounds"),
              ("aggregations", "--aggregation"), ("line_buffers", "--line-buffer"),
-             ("medians", "--median"), ("subpixel_bits", "--subpixel-bits"))
+             ("medians", "--median"), ("subpixel_bits", "--subpixel-bits"),
+             ("fifth_paths", "--fifth-path"), ("cost_terms", "--cost-term"))
 
 
-def _params(grid, transform, block, rounds, aggregation, line_buffer, median, bits):
+def _params(grid, transform, block, rounds, aggregation, line_buffer, median, bits, fifth,
+            term):
+    # The SGM axes do not apply to a box: it is taken once, without them.
+    sgm = aggregation == SGM
+    fifth, term = fifth and sgm, term if sgm else None
     return StereoParams(transform=transform, block=block, disparities=grid.disparities,
                         rounds=rounds, aggregation=aggregation,
                         lr_threshold=grid.lr_threshold, width=grid.width,
                         height=grid.height, line_buffer=line_buffer,
-                        lut_inputs=grid.lut_inputs, median=median, subpixel_bits=bits)
+                        lut_inputs=grid.lut_inputs, median=median, subpixel_bits=bits,
+                        cost_term=term, fifth_path=fifth)
 
 
 def configurations(grid):
@@ -96,14 +106,17 @@ def configurations(grid):
     A value that no combination accepts (block 4, rounds that do not divide D, an
     aggregation window too wide for the frame) is a one-line :class:`ParameterError`; a
     combination of values that others accept, but not together (SGM's default penalties
-    with a transform whose costs are too narrow for them), is
-    skipped and named. An
+    with a transform whose costs are too narrow for them), is skipped and named. The SGM
+    axes (fifth path, cost terms) apply to the SGM configurations, a box is taken once
+    without them; asked for in a grid without SGM they are a one-line
+    :class:`UserError`. An
     empty axis, or a grid whose every combination is skipped, is a one-line
     :class:`UserError`.
     """
     for axis, option in Grid._AXES:
         if not getattr(grid, axis):
             raise UserError(f"the grid is empty: {option} has no values")
+    _check_sgm_axes(grid)
     chosen, skipped, errors = [], [], {}
     valid = set()
     for combination in itertools.product(*(getattr(grid, axis) for axis, _ in Grid._AXES)):
@@ -127,6 +140,17 @@ def configurations(grid):
     if not chosen:
         raise UserError(f"the grid is empty: no valid configuration ({skipped[0]})")
     return chosen, skipped
+
+
+def _check_sgm_axes(grid):
+    """The fifth path and the cost terms are SGM's: a grid that asks for them needs sgm
+    among its aggregations (one line, as the other commands say it)."""
+    given = (["--fifth-path on"] if True in grid.fifth_paths else []) + [
+        f"--cost-term {term}" for term in grid.cost_terms if term is not None]
+    if given and SGM not in grid.aggregations:
+        verb = "is an SGM option: it needs" if len(given) == 1 else \
+            "are SGM options: they need"
+        raise UserError(f"{' and '.join(given)} {verb} sgm among the --aggregation values")
 
 
 def scene_digest(left, right, truth):
@@ -338,8 +362,10 @@ def _point(params, index, scenes, plan, dev, pnr, clock):
 
 def _label(params):
     buffer = "" if params.line_buffer == "auto" else f" {params.line_buffer}"
-    options = (" median" if params.median else "") + (
-        f" F={params.subpixel_bits}" if params.subpixel_bits else "")
+    options = ((f" +{params.cost_term}" if params.cost_term else "")
+               + (" fifth path" if params.fifth_path else "")
+               + (" median" if params.median else "")
+               + (f" F={params.subpixel_bits}" if params.subpixel_bits else ""))
     return (f"{params.transform} {params.block}x{params.block} R={params.rounds} "
             f"A={params.aggregation}{buffer}{options}")
 

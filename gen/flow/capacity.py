@@ -5,8 +5,9 @@ Place and route of a design above the device's capacity cannot succeed, and next
 minutes to say so (or hangs in the router); the check here answers from the synthesis
 counts at once. ``npstereo explore`` says of every configuration "fits" or "does not fit
 (112 % LUT)" for the user's device. A core whose memories hold more bits than the device
-(:attr:`Device.memory_bits`) is refused before any synthesis: its bits are known from the
-parameters alone (:func:`memory_fit_message`).
+(:attr:`Device.memory_bits`), or on an ECP5 part more DP16KD than it has, is refused
+before any synthesis: its bits and blocks are known from the parameters alone
+(:func:`memory_fit_message`, :mod:`.block_rams`).
 
 Each device is measured by one synthesis target (:data:`.tools.TARGETS`): the
 ECP5 parts by ``synth_ecp5`` (and ``nextpnr-ecp5`` for the clock), the Cyclone V by
@@ -231,16 +232,25 @@ def fit_message(utilisation):
                                          for percent, name in over) + ")"
 
 
-def memory_fit_message(bits, dev):
-    """``None`` when ``dev`` holds ``bits`` of memory, else ``"does not fit (memory 112 %)"``.
+def memory_fit_message(bits, dev, block_rams=None):
+    """``None`` when ``dev`` holds the core's memories, else "does not fit (memory 112 %)".
 
-    The bits are the architecture's (:func:`npstereo.hdl.plan_memories.memory_bits`), a
+    ``bits`` are the architecture's (:func:`npstereo.hdl.plan_memories.memory_bits`), a
     lower bound of the RAM its memories take (a block RAM holds its full bits only at its
-    full width and depth; only a memory of a few words may go to flip-flops instead). Just
-    over the capacity the percent has a decimal, rounded up, so that it never reads 100 %.
+    full width and depth; only a memory of a few words may go to flip-flops instead),
+    checked against :attr:`Device.memory_bits`. ``block_rams``: the DP16KD they take as
+    Yosys maps them (:func:`~.block_rams.core_block_rams`), checked against an ECP5 part's
+    DP16KD: a core can fit by its bits and not by its blocks, whose narrow or shallow
+    memories each take a whole block. The percent is the larger of the two (blocks needed
+    over blocks on the device); just over the capacity it has a decimal, rounded up, so
+    that it never reads 100 %.
     """
-    if bits <= dev.memory_bits:
+    ratios = [bits / dev.memory_bits]
+    blocks = [r.capacity for r in dev.resources if r.name == "DP16KD"]
+    if block_rams is not None and blocks:
+        ratios.append(block_rams / blocks[0])
+    if max(ratios) <= 1:
         return None
-    percent = 100.0 * bits / dev.memory_bits
+    percent = 100.0 * max(ratios)
     shown = f"{percent:.0f}" if percent >= 101 else f"{math.ceil(percent * 10) / 10:.1f}"
     return f"does not fit (memory {shown} %)"

@@ -5,9 +5,9 @@ result cache (:mod:`.cache`), with the cycles per frame and the frame rate they 
 report from the cache alone; :func:`synthesis_job` is a report as a task of a sweep (it
 never raises) and :func:`store_report` files a worker's results in the client's cache.
 
-A target whose device cannot hold the core's memories (:func:`memory_refusal`) is not
-synthesised: its result says "does not fit (memory N %)" at once, from the parameters
-alone. Such a verdict costs nothing to give again and is never cached.
+A target whose device cannot hold the core's memories, by their bits or (ECP5) by the
+block RAMs Yosys would map them to (:func:`memory_refusal`), is not synthesised: its result
+says "does not fit (memory N %)" at once, from the parameters alone. Such a verdict costs nothing to give again and is never cached.
 """
 
 import dataclasses
@@ -18,6 +18,7 @@ from ...hdl.plan_memories import memory_bits
 from ...hdl.plan_timing import cycles_per_frame
 from ...hdl.verilog import TOP_NAME, core_verilog
 from ...params import StereoParams
+from ..flow.block_rams import core_block_rams
 from ..flow.capacity import DEFAULT_DEVICE, fit_message, memory_fit_message, target_device
 from ..flow.synthesise import synthesise
 from .cache import cache_key, design, incomplete, memoised_digest, read_result, refused, \
@@ -43,20 +44,24 @@ def memory_refusal(params, target, dev):
 
     Status ``does not fit`` with the message of
     :func:`~npstereo.gen.flow.capacity.memory_fit_message`, ``memory_bits`` the
-    architecture's, the figures only synthesis gives None, ``device`` the device checked
-    and ``synthesised`` False (:func:`~.cache.refused`). Nothing is generated or
-    synthesised: the bits follow from the parameters.
+    architecture's, ``expected_block_rams`` the DP16KD its memories take on an ECP5 part
+    (:func:`~npstereo.gen.flow.block_rams.core_block_rams`; None on the others), the figures
+    only synthesis gives None, ``device`` the device checked and ``synthesised`` False
+    (:func:`~.cache.refused`). Nothing is generated or synthesised: the bits and blocks
+    follow from the parameters.
     """
     started = time.monotonic()
     bits = memory_bits(params)
-    message = memory_fit_message(bits, dev)
+    blocks = core_block_rams(params) if dev.target == "ecp5" else None
+    message = memory_fit_message(bits, dev, blocks)
     if message is None:
         return None
     unknown = dict.fromkeys(("logic", "logic_unit", "registers", "block_rams",
                              "block_ram_kind", "lut_rams", "dsps", "ffram_bits",
                              "logic_levels", "utilisation", "frames_per_second"))
     return dict(target=target, status="does not fit", message=message, device=dev.name,
-                memory_bits=bits, fmax_mhz=None, fits=False, synthesised=False, **unknown,
+                memory_bits=bits, expected_block_rams=blocks, fmax_mhz=None, fits=False,
+                synthesised=False, **unknown,
                 seconds=round(time.monotonic() - started, 1), cached=False)
 
 
