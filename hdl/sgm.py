@@ -293,7 +293,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             m.d.comb += address.eq(base + slots.round(2))
             words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
                                        banks, address, write_count, written[name],
-                                       self._valid_at(t.rows)))
+                                       self._valid_at(t.rows - 1)))
         (top, top_left), top_right = split_lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.
         store = Store(m, "sgm_top_left_store", unsigned(word_bits), rounds)
