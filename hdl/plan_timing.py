@@ -183,10 +183,10 @@ SGM_ROW_CLOCKS = 13
 def sgm_row_clocks(params):
     """Clocks to L of the paths from the row above: :data:`SGM_ROW_CLOCKS`, and with the
     path rows in several banks (W R words, :func:`~.plan_structure.row_banks`) a clock more
-    per level of the bank's choice
+    for the register behind each bank's and a clock more per level of the bank's choice
     (:func:`~.banks.banked_memory`)."""
     banks = len(row_banks(params))
-    return SGM_ROW_CLOCKS + (choice_levels(banks) if banks > 1 else 0)
+    return SGM_ROW_CLOCKS + (1 + choice_levels(banks) if banks > 1 else 0)
 
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
