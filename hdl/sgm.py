@@ -346,18 +346,21 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             minimum, bound = minima[path]
             # The comparison with m + P2 and the difference to m side by side, then the
             # choice and + C (the three in one clock were 6 LUT levels, census 7x7).
-            below = [register(m, b <= bound, 1, f"{name}_below{i}")
-                     for i, b in enumerate(best)]
-            above_m = [register(m, (b - minimum)[:bits_for(p.p2)], bits_for(p.p2),
-                                f"{name}_over{i}") for i, b in enumerate(best)]
-            p2_now = self._aligned(p2[path], t.guide, normalise + 1, f"{name}_p2")
-            fresh_now = self._aligned(fresh[path], t.guide, normalise + 1, f"{name}_fresh")
+            below = [register(m, b <= c, 1, f"{name}_below{i}")
+                     for i, (b, c) in enumerate(zip(best, bound))]
+            above_m = [register(m, (b - c)[:bits_for(p.p2)], bits_for(p.p2),
+                                f"{name}_over{i}")
+                       for i, (b, c) in enumerate(zip(best, minimum))]
+            p2_now = self._lane_copies(m, p2[path], t.guide, normalise + 1, f"{name}_p2")
+            fresh_now = self._lane_copies(m, fresh[path], t.guide, normalise + 1,
+                                          f"{name}_fresh")
             # The choice registered, + C a clock later: both in one clock, behind P2's
             # register for every lane, were census 7x7 SGM's critical path at R = 10
             # (10.6 ns) once the comparisons above were registered.
-            step = [register(m, _normalised(le, over, p2_now, fresh_now), bits_for(p.p2),
+            step = [register(m, _normalised(le, over, p2c, fc), bits_for(p.p2),
                              f"{name}_step{i}")
-                    for i, (le, over) in enumerate(zip(below, above_m))]
+                    for i, (le, over, p2c, fc) in enumerate(zip(below, above_m, p2_now,
+                                                               fresh_now))]
             results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 
@@ -407,6 +410,8 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             name = f"sgm_{path.replace('-', '_')}"
             bound = register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
                               bits + 1, f"{name}_bound")
-            result[path] = (self._aligned(used[path], 4, offset, f"{name}_m"),
-                            self._aligned(bound, 5, offset, f"{name}_bound"))
+            # Copied per group of lanes: one register of m + P2 into every lane's
+            # comparison was census 7x7 SGM's path at R = 10 (7.40 ns, 5.26 of it routing).
+            result[path] = (self._lane_copies(m, used[path], 4, offset, f"{name}_m"),
+                            self._lane_copies(m, bound, 5, offset, f"{name}_bound"))
         return result, memory

@@ -67,6 +67,15 @@ class PathOwner:
             return value
         return self._slots.delay(value, start, offset - start, name)
 
+    def _lane_copies(self, m, value, start, offset, name):
+        """:meth:`_aligned` to ``offset`` > ``start``, its last register copied per group of
+        lanes (:func:`_copies`): the list of each lane's copy."""
+        if isinstance(value, Const):
+            return [value] * self.params.per_round
+        early = self._aligned(value, start, offset - 1, name)
+        return _copies(m, early, value.shape(), self.params.per_round, f"{name}_s{offset}",
+                       self._slots.first(offset - 1))
+
 
 def _less(a, b, bits):
     """a < b for values kept modulo 2^bits that differ by less than 2^(bits - 1)."""
