@@ -21,7 +21,7 @@ from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
-           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages",
+           "sgm_row_clocks", "SGM_ABOVE_EVERY", "SGM_LEFT_LEAD", "sgm_left_stages",
            "sgm_left_read_registered", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "FifthTiming", "sgm_fifth_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
@@ -189,6 +189,12 @@ def sgm_row_clocks(params):
     return SGM_ROW_CLOCKS + (1 + choice_levels(banks) if banks > 1 else 0)
 
 
+#: Register spacing of the sum of the three paths from above: every level (two additions
+#: in one clock were census 7x7 SGM's path at R = 10, 6.96 ns; the sum waits for the left
+#: path's L anyway).
+SGM_ABOVE_EVERY = 1
+
+
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
 #: its loop (hdl/sgm_left.py): b(x) of the history or of G(0) registered (<= 1 clock after),
 #: C(p, b) picked (two clocks), its file written, the picked costs read, their sum with P2,
@@ -294,7 +300,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     rows = sgm_row_clocks(params)
     # The three paths from above are summed first (then wait for the left path as one
     # sum, not three L), then the left path's L is added.
-    above = rows + sum(register_plan(len(SGM_ROW_PATHS), every, 0, True))
+    above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, history,
                      sum_clocks, picks, left, rows, rows + tree + rounds, summed)

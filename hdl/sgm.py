@@ -44,7 +44,8 @@ from .banks import banked_memory, line_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, \
     replica, split_lanes, tag_layout, taps
 from .plan_structure import row_banks
-from .plan_timing import SGM_ROW_CLOCKS, sgm_fifth_timing, sgm_timing
+from .plan_timing import SGM_ABOVE_EVERY, SGM_ROW_CLOCKS, sgm_fifth_timing, \
+    sgm_timing
 from .sgm_left import PathOwner, left_path
 from .sgm_right import fifth_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
@@ -185,7 +186,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         # for the left path's L (at R = 1 eight clocks): one sum of 9 bits a lane in the
         # delay line instead of three L of 7 (5,600 of the 55,700 flip-flops of census 5x5
         # at D = 64, R = 1).
-        plan = register_plan(len(SGM_ROW_PATHS), self.every, 0, True)
+        plan = register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True)
         above = [build_sum(m, 1, [rows[path][i] for path in SGM_ROW_PATHS], plan)
                  for i in range(units)]
         above_at = t.rows + sum(plan)
