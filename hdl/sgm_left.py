@@ -353,7 +353,7 @@ def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
         # was next (9.9 ns, five LUT levels, at R = 10).
         ahead = t.left_history
         x = column(at - ahead)
-        near = register(m, x + k <= age, 1, f"sgm_left_young{k}")
+        near = register(m, x <= age - k, 1, f"sgm_left_young{k}")
         entry = register(m, (x + k)[:age.bit_length() - 1], age.bit_length() - 1,
                           f"sgm_left_history_at{k}")
         if ahead == 2:
