@@ -312,7 +312,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
                   "top-right": register(m, top_right, word_bits, "sgm_top_right_newest")}
 
         minima, minima_write = self._row_minima(m, p2, normalise)
-        results, leaves = {}, {}
+        results = {}
         for path in SGM_ROW_PATHS:
             name = f"sgm_{path.replace('-', '_')}"
             word = split_lanes(newest[path], units, bits)                   # round j + 1 at 6 + j
@@ -364,16 +364,11 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
                                                                fresh_now))]
             results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
-            # And a copy of L for the minimum tree: L's registers also feed the rows'
-            # block RAMs and the sum, and L into the tree's first comparison was census
-            # 7x7 SGM's critical path at R = 10 (6.74 ns, 4.78 of it routing).
-            leaves[path] = [replica(m, c + s, f"{name}_l{i}_leaf", bits, reset_less=True)
-                            for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 
         m.d.comb += [written["top"].eq(Cat(*results["top"], *results["top-left"])),
                      written["top_right"].eq(Cat(*results["top-right"]))]
         # Their minima, once the last round's running minimum is complete.
-        running = [self._running_min(m, leaves[path], t.rows,
+        running = [self._running_min(m, results[path], t.rows,
                                      f"sgm_{path.replace('-', '_')}_m") for path in SGM_ROW_PATHS]
         m.d.comb += [
             minima_write.write_addr.eq(self._aligned(x, 0, t.minima, "sgm_minima_column")),

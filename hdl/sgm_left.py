@@ -290,13 +290,8 @@ def left_path(owner, m, fresh, p2):
                      owner._valid_at(last))
     lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
-    # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``, from copies of Lu's
-    # registers of the tree's own: Lu's registers also feed the output's delay and the
-    # last pick, and Lu into the tree's first comparison was census 7x7 SGM's critical
-    # path at R = 10 (6.67 ns, 4.66 of it routing, 149.9 MHz).
-    leaves = [replica(m, v, f"sgm_left_lu{i}_leaf", bits, reset_less=True)
-              for i, v in enumerate(new)]
-    item = _argmin(m, leaves, less, "sgm_left_lu_min")
+    # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
+    item = _argmin(m, lu, less, "sgm_left_lu_min")
     minimum, best_round, best_lane = _running_argmin(owner, m, item, lu_at + tree, less,
                                                      "sgm_left_lu_min")
     done = valid(argmin_at)
