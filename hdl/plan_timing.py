@@ -21,8 +21,8 @@ from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
-           "sgm_row_clocks", "SGM_LEFT_LEAD", "sgm_left_stages", "sgm_left_firsts_registered",
-           "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
+           "sgm_row_clocks", "SGM_ABOVE_EVERY", "SGM_LEFT_LEAD", "sgm_left_stages",
+           "sgm_left_firsts_registered", "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "FifthTiming", "sgm_fifth_timing", "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
@@ -183,10 +183,16 @@ SGM_ROW_CLOCKS = 13
 def sgm_row_clocks(params):
     """Clocks to L of the paths from the row above: :data:`SGM_ROW_CLOCKS`, and with the
     path rows in several banks (W R words, :func:`~.plan_structure.row_banks`) a clock more
-    per level of the bank's choice
+    for the register behind each bank's and a clock more per level of the bank's choice
     (:func:`~.banks.banked_memory`)."""
     banks = len(row_banks(params))
-    return SGM_ROW_CLOCKS + (choice_levels(banks) if banks > 1 else 0)
+    return SGM_ROW_CLOCKS + (1 + choice_levels(banks) if banks > 1 else 0)
+
+
+#: Register spacing of the sum of the three paths from above: every level (two additions
+#: in one clock were census 7x7 SGM's path at R = 10, 6.96 ns; the sum waits for the left
+#: path's L anyway).
+SGM_ABOVE_EVERY = 1
 
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
@@ -310,7 +316,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     rows = sgm_row_clocks(params)
     # The three paths from above are summed first (then wait for the left path as one
     # sum, not three L), then the left path's L is added.
-    above = rows + sum(register_plan(len(SGM_ROW_PATHS), every, 0, True))
+    above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, history,
                      sum_clocks, picks, left, rows, rows + tree + rounds, summed)

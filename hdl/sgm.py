@@ -42,9 +42,10 @@ from amaranth.lib.wiring import In, Out
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .banks import banked_memory, line_memory
 from .common import SlotClock, Store, absolute_difference, bits_for, register, \
-    split_lanes, tag_layout, taps
+    replica, split_lanes, tag_layout, taps
 from .plan_structure import row_banks
-from .plan_timing import SGM_ROW_CLOCKS, sgm_fifth_timing, sgm_timing
+from .plan_timing import SGM_ABOVE_EVERY, SGM_ROW_CLOCKS, sgm_fifth_timing, \
+    sgm_timing
 from .sgm_left import PathOwner, left_path
 from .sgm_right import fifth_path
 from .trees import DEFAULT_EVERY, build_sum, build_tree, register_plan
@@ -185,7 +186,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         # for the left path's L (at R = 1 eight clocks): one sum of 9 bits a lane in the
         # delay line instead of three L of 7 (5,600 of the 55,700 flip-flops of census 5x5
         # at D = 64, R = 1).
-        plan = register_plan(len(SGM_ROW_PATHS), self.every, 0, True)
+        plan = register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True)
         above = [build_sum(m, 1, [rows[path][i] for path in SGM_ROW_PATHS], plan)
                  for i in range(units)]
         above_at = t.rows + sum(plan)
@@ -293,12 +294,19 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             m.d.comb += address.eq(base + slots.round(2))
             words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
                                        banks, address, write_count, written[name],
-                                       self._valid_at(t.rows)))
+                                       self._valid_at(t.rows - 1)))
         (top, top_left), top_right = split_lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.
+        # Its own copies of the round counter for the read and the write: the shared
+        # counter into the LUT RAM's read was census 7x7 SGM's path at R = 10 (7.08 ns,
+        # 6.32 of it routing).
         store = Store(m, "sgm_top_left_store", unsigned(word_bits), rounds)
-        held = store.read(slots.round(word_at))
-        store.write(slots.round(word_at), top_left, self._valid_at(word_at))
+        read_round, write_round = (
+            slots.round(word_at) if rounds == 1 else
+            replica(m, slots.round(word_at - 1), f"sgm_top_left_{use}_round",
+                    reset_less=True) for use in ("read", "write"))
+        held = store.read(read_round)
+        store.write(write_round, top_left, self._valid_at(word_at))
         newest = {"top-left": register(m, held, word_bits, "sgm_top_left_newest"),
                   "top": register(m, top, word_bits, "sgm_top_newest"),
                   "top-right": register(m, top_right, word_bits, "sgm_top_right_newest")}
@@ -314,11 +322,17 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
                     enumerate(current)]                                # round j at 7 + j
             values = [register(m, v, bits, f"{name}_q{i}") for i, v in enumerate(current)]
             # The neighbours across the round's edges, for round j at 7 + j: the previous
-            # round's last lane and the next round's first (none outside 0 .. D-1).
-            before = register(m, Mux(slots.round(word_at + 2) == 0, ones, plus[units - 1]),
-                               plus_bits, f"{name}_p_before")
-            after = register(m, Mux(slots.round(word_at + 2) == rounds - 1, ones,
-                                     word[0] + p1), plus_bits, f"{name}_p_after")
+            # round's last lane and the next round's first (none outside 0 .. D-1). The
+            # edge flags registered from the round a clock earlier, per path: the shared
+            # round counter through its comparisons into the three paths' multiplexers
+            # was census 7x7 SGM's critical path at R = 10 (7.71 ns, 6.71 of it routing).
+            round_ = slots.round(word_at + 1)
+            first_round = register(m, round_ == 0, 1, f"{name}_first_round")
+            last_round = register(m, round_ == rounds - 1, 1, f"{name}_last_round")
+            before = register(m, Mux(first_round, ones, plus[units - 1]), plus_bits,
+                              f"{name}_p_before")
+            after = register(m, Mux(last_round, ones, word[0] + p1), plus_bits,
+                             f"{name}_p_after")
             neighbours = [before, *plus, after]
             # The comparisons registered with their candidates, then the choice (both in
             # one clock were census 7x7 SGM's critical path at R = 10, 8.53 ns).
@@ -333,18 +347,21 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             minimum, bound = minima[path]
             # The comparison with m + P2 and the difference to m side by side, then the
             # choice and + C (the three in one clock were 6 LUT levels, census 7x7).
-            below = [register(m, b <= bound, 1, f"{name}_below{i}")
-                     for i, b in enumerate(best)]
-            above_m = [register(m, (b - minimum)[:bits_for(p.p2)], bits_for(p.p2),
-                                f"{name}_over{i}") for i, b in enumerate(best)]
-            p2_now = self._aligned(p2[path], t.guide, normalise + 1, f"{name}_p2")
-            fresh_now = self._aligned(fresh[path], t.guide, normalise + 1, f"{name}_fresh")
+            below = [register(m, b <= c, 1, f"{name}_below{i}")
+                     for i, (b, c) in enumerate(zip(best, bound))]
+            above_m = [register(m, (b - c)[:bits_for(p.p2)], bits_for(p.p2),
+                                f"{name}_over{i}")
+                       for i, (b, c) in enumerate(zip(best, minimum))]
+            p2_now = self._lane_copies(m, p2[path], t.guide, normalise + 1, f"{name}_p2")
+            fresh_now = self._lane_copies(m, fresh[path], t.guide, normalise + 1,
+                                          f"{name}_fresh")
             # The choice registered, + C a clock later: both in one clock, behind P2's
             # register for every lane, were census 7x7 SGM's critical path at R = 10
             # (10.6 ns) once the comparisons above were registered.
-            step = [register(m, _normalised(le, over, p2_now, fresh_now), bits_for(p.p2),
+            step = [register(m, _normalised(le, over, p2c, fc), bits_for(p.p2),
                              f"{name}_step{i}")
-                    for i, (le, over) in enumerate(zip(below, above_m))]
+                    for i, (le, over, p2c, fc) in enumerate(zip(below, above_m, p2_now,
+                                                               fresh_now))]
             results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 
@@ -394,6 +411,8 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             name = f"sgm_{path.replace('-', '_')}"
             bound = register(m, used[path] + self._aligned(p2[path], t.guide, 4, f"{name}_p2m"),
                               bits + 1, f"{name}_bound")
-            result[path] = (self._aligned(used[path], 4, offset, f"{name}_m"),
-                            self._aligned(bound, 5, offset, f"{name}_bound"))
+            # Copied per group of lanes: one register of m + P2 into every lane's
+            # comparison was census 7x7 SGM's path at R = 10 (7.40 ns, 5.26 of it routing).
+            result[path] = (self._lane_copies(m, used[path], 4, offset, f"{name}_m"),
+                            self._lane_copies(m, bound, 5, offset, f"{name}_bound"))
         return result, memory

@@ -228,12 +228,13 @@ def test_broken_row_normalisation_is_caught(monkeypatch):
                                                                   (8, 8, 10, 2)])
 def test_path_rows_in_banks_match_golden(monkeypatch, shallowest, deepest, banks, levels):
     """Path rows of W R = 80 words: from banks of 8 words deepened to 32 (3 banks, one level
-    of choice), or kept at 8 (10 banks, two registered levels), L a clock later per level."""
+    of choice), or kept at 8 (10 banks, two registered levels), L a clock later for the
+    register behind the banks' and per level."""
     monkeypatch.setattr(plan_structure, "ROW_BANK", shallowest)
     monkeypatch.setattr(plan_structure, "ROW_BANK_DEEPEST", deepest)
     assert len(plan_structure.row_banks(BROKEN)) == banks
     assert plan_structure.choice_levels(banks) == levels
-    assert plan_timing.sgm_row_clocks(BROKEN) == plan_timing.SGM_ROW_CLOCKS + levels
+    assert plan_timing.sgm_row_clocks(BROKEN) == plan_timing.SGM_ROW_CLOCKS + 1 + levels
     check_stage(BROKEN, monkeypatch, seed=banks)
 
 
@@ -268,6 +269,14 @@ def test_broken_path_rows_bank_choice_is_caught(monkeypatch):
     """The bank chosen a clock early: words from the bank of the next address."""
     monkeypatch.setattr(plan_structure, "ROW_BANK", 32)
     choose_bank_early(monkeypatch, "_bank", clocks=0)
+    assert_stage_caught(monkeypatch)
+
+
+def test_broken_path_rows_bank_register_is_caught(monkeypatch):
+    """The bank's index without the clock of the registers behind the banks' output
+    registers: words from the bank of the next address."""
+    monkeypatch.setattr(plan_structure, "ROW_BANK", 32)
+    choose_bank_early(monkeypatch, "_read_bank")
     assert_stage_caught(monkeypatch)
 
 
