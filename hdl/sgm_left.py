@@ -331,14 +331,9 @@ def left_path(owner, m, fresh, p2):
     # it into every lane's subtraction was census 7x7 SGM's path at R = 10 (7.19 ns, 5.54
     # of it routing), one per eight lanes still 6.64 ns (4.49).
     previous_m = _copies(m, minimum, bits, units, "sgm_left_m", done, _OUTPUT_LANES_PER_COPY)
-    # Which entry is written, decoded a clock ahead into a flag per entry: the shared valid
-    # flag into the history's enables was census 7x7 SGM's critical path at R = 10
-    # (`sgm_valid28_s28` into `sgm_left_g2`, 8.21 ns, 121.8 MHz).
-    x = column(argmin_at - 1)
+    x = column(argmin_at)
     for k, entry in enumerate(history):
-        flag = Signal(name=f"sgm_left_history_write{k}")
-        m.d.sync += flag.eq(valid(argmin_at - 1) & (x[:age.bit_length() - 1] == k))
-        with m.If(flag):
+        with m.If(done & (x[:age.bit_length() - 1] == k)):
             m.d.sync += entry.eq(Cat(best_lane, best_round))
     _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums)
 
