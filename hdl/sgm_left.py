@@ -237,8 +237,8 @@ def left_path(owner, m, fresh, p2):
         # path at R = 10 (9.44 ns, 106 MHz), the read, + P1 and the comparisons census 5x5
         # SGM's at 1280 x 720, D = 64, R = 4 (10.76 ns, 92.9 MHz).
         store = Store(m, "sgm_left_store", unsigned(2 * units * bits), rounds)
-        word_next = store.read(slots.round(loop - 1))
-        word = register(m, word_next, 2 * units * bits, "sgm_left_word")
+        word = register(m, store.read(slots.round(loop - 1)), 2 * units * bits,
+                        "sgm_left_word")
     centre, plus = split_lanes(word, units, bits), split_lanes(word[units * bits:], units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
@@ -246,38 +246,28 @@ def left_path(owner, m, fresh, p2):
     # Lu(d). The edge flags come from the round counters of a clock earlier, registered:
     # the counter, the store's read and the comparisons in one clock were census 7x7 SGM's
     # critical path at R = 10 (10.6 ns).
-    firsts = just_written = None
+    before = register(m, plus[units - 1], bits, "sgm_left_before")
+    firsts = None
     if rounds > 1:
-        # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before.
-        firsts = ShiftStore(m, "sgm_left_firsts", unsigned(bits), rounds - 1) if shifting \
-            else Store(m, "sgm_left_firsts", unsigned(bits), rounds)
-    if sgm_left_firsts_registered(rounds):
-        # R >= 5: both edge neighbours chosen a clock early, into registers of their own,
-        # from the word about to be registered (round j's), the word registered now (round
-        # j - 1's last lane) and the first lanes' store (round j + 1's, the round counter
-        # two clocks earlier reads j + 1): the edge flag's register through the choice into
-        # the comparisons was census 7x7 SGM's critical path at R = 10 (6.94 ns, 144.1 MHz).
-        plus_next = split_lanes(word_next[units * bits:], units, bits)
-        round_ = slots.round(loop - 1)
-        below = register(m, Mux(round_ == 0, plus_next[0], plus[units - 1]), bits,
-                         "sgm_left_below")
-        above = register(m, Mux(round_ == rounds - 1, plus_next[units - 1],
-                                firsts.read(slots.round(loop - 2))), bits, "sgm_left_above")
-    elif rounds > 1:
-        before = register(m, plus[units - 1], bits, "sgm_left_before")
         first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
         last_round = register(m, slots.round(loop - 1) == rounds - 1, 1,
                               "sgm_left_last_round")
+        # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before.
+        firsts = ShiftStore(m, "sgm_left_firsts", unsigned(bits), rounds - 1) if shifting \
+            else Store(m, "sgm_left_firsts", unsigned(bits), rounds)
+        # The round counter two clocks earlier reads j + 1 (mod R) a clock before round j.
+        just_written = None
         if shifting:
             following = firsts.oldest
         else:
+            following = register(m, firsts.read(slots.round(loop - 2)), bits,
+                                 "sgm_left_following")
+        if not shifting and not sgm_left_firsts_registered(rounds):
             # R = 3, 4: the word is written in the clock before its read when the slot
             # before held a position, and a clock too late for the early read; it is then
             # taken from the write's own register. Read through the LUT RAM at the round
             # counter, it was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4
             # (9.83 ns, 101.8 MHz).
-            following = register(m, firsts.read(slots.round(loop - 2)), bits,
-                                 "sgm_left_following")
             just_written = Signal(bits, name="sgm_left_just_written", reset_less=True)
             just_valid = Signal(name="sgm_left_just_valid")
             following = Mux(just_valid, just_written, following)
