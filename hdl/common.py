@@ -309,8 +309,10 @@ class ShiftStore:
         """The word written ``depth`` writes ago."""
         return self._words[-1]
 
-    def push(self, data, enable):
-        """At the clock edge when ``enable``: ``data`` in, every word one place older."""
+    def write(self, address, data, enable):
+        """At the clock edge when ``enable``: ``data`` in, every word one place older.
+        ``address`` (the round) is implied by the order of the writes; it is taken so that
+        a shifting store is written as a :class:`Store` is."""
         with self.m.If(enable):
             self.m.d.sync += [newer.eq(older) for newer, older
                               in zip(self._words[1:], self._words[:-1])]

@@ -304,10 +304,10 @@ def left_path(owner, m, fresh, p2):
                   for i, c in enumerate(costs[last - 1])]
     new_plus = [(c + Mux(f, 0, best))[:bits]
                 for c, f, best in zip(costs_plus, fresh_copies, lanes)]
-    _write(store, slots.round(last), Cat(*new, *new_plus), owner._valid_at(last))
+    store.write(slots.round(last), Cat(*new, *new_plus), owner._valid_at(last))
     if firsts is not None:
         first = new_plus[0]
-        _write(firsts, slots.round(last), first, owner._valid_at(last))
+        firsts.write(slots.round(last), first, owner._valid_at(last))
         if just_written is not None:
             m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
     lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
@@ -335,14 +335,6 @@ def left_path(owner, m, fresh, p2):
     return [register(m, (v - Mux(f, 0, mc))[:p.left_cost_bits], p.left_cost_bits,
                      f"sgm_left_l{i}")
             for i, (v, f, mc) in enumerate(zip(delayed, fresh_out, previous_m))]
-
-
-def _write(store, round_, data, enable):
-    """Write round ``round_``'s word: by its address, or into a shifting store in order."""
-    if isinstance(store, ShiftStore):
-        store.push(data, enable)
-    else:
-        store.write(round_, data, enable)
 
 
 def _reference(owner, m, column, m0, p2, chosen, sums):

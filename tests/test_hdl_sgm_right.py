@@ -51,7 +51,8 @@ def check_right(params, monkeypatch, seed, bubbles=0.3, mirrored=True, p2_of=Non
 
     slots = stage_slots(width, height, stream, bubbles)
     clocks = [(slot, j) for slot in slots for j in range(rounds)]
-    # The left path's stores are LUT RAM from R = 2 on (registers at R = 1).
+    # The left path's stores are LUT RAM from R = 3 on (shifting registers at R <= 2,
+    # where the recursion has no memory to fill at R = 1).
     fill = random_memories(monkeypatch, seed) if rounds > 1 else (lambda ctx: None)
     dut = RightPathRecursion(params)
     latency, got = dut.latency, {}
