@@ -250,7 +250,8 @@ class InputStage(wiring.Component):
             for k in range(len(copies)):
                 row = firsts[k // per_window] + r
                 centre = columns[r][8 * row:8 * row + 8]
-                copy = Signal(8, name=f"{name}_centre{k}", reset_less=True)
+                copy = Signal(8, name=f"{name}_centre{k}", reset_less=True,
+                              attrs=slots.private_attrs())
                 with m.If(slots.private_first(SHIFTED, k, f"{name}_centre{k}_round")):
                     m.d.sync += copy.eq(centre)
                 m.d.comb += copies[k].eq(pipe(m, copy, 1, f"{name}_centre{k}_late"))

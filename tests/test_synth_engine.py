@@ -4,7 +4,9 @@ Both must produce the same cells for the same design (they are the same Yosys ve
 the native one runs in a worker process whose whole process group a timeout kills.
 """
 
+import json
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -380,3 +382,23 @@ def test_replicas_stay_copies(tmp_path, target, monkeypatch):
     merged = synthesise(design, target, "top", keep=tmp_path / "merged")
     assert merged["status"] == "ok", merged
     assert merged["registers"] <= 1 + 1 + 3 * 8     # the copies are one register (or none)
+
+
+@pytest.mark.parametrize("rounds", [1, 2])
+def test_window_shift_enables_stay_copies(tmp_path, rounds):
+    """The input stage's shift enables (one per group of window rows) are copies loaded by
+    private enables; at R = 1 those are constants, and only ``keep`` holds the copies
+    apart. Counted as distinct nets of the synthesised netlist: one net for all of them
+    was the census 5x5 box's critical path at 1280x720 (8.4 ns of wire). Broken variant:
+    without the attribute at R = 1 the 15 copies per image (5 columns x 3 groups of the
+    9 rows) are one net."""
+    params = StereoParams(transform="census", block=5, disparities=4, rounds=rounds,
+                          width=16, height=8)
+    result = synthesise(core_verilog(params), "ecp5", "npstereo_core", keep=tmp_path)
+    assert result["status"] == "ok", result
+    netlist = json.loads((tmp_path / "synth.json").read_text())
+    names = netlist["modules"]["npstereo_core"]["netnames"]
+    for image in ("left", "right"):
+        pattern = re.compile(rf"input_stage\.{image}_shift\d+$")
+        copies = [tuple(net["bits"]) for name, net in names.items() if pattern.search(name)]
+        assert len(copies) == 15 and len(set(copies)) == 15, copies
