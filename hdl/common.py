@@ -241,19 +241,20 @@ class SlotClock:
         apart, and the Verilog stays as it was."""
         return {"keep": 1} if self.rounds == 1 else {}
 
-    def delay(self, value, start, steps, name, reset_less=False):
+    def delay(self, value, start, steps, name, reset_less=False, keep=False):
         """A value slot-aligned at ``start`` moved ``steps`` clocks later.
 
         A latch loaded in clock k of a slot (0 <= k < R) holds the slot's value from
         clock k + 1 to k + R: one register moves a value by up to R clocks, so the delay
         costs ceil(steps / R) registers, not ``steps`` (the value is constant for R
         clocks). Tags keep their reset (their valid bits must clear); data need not.
+        ``keep``: the registers are copies synthesis must keep apart (as :func:`replica`'s).
         """
         done = 0
         while done < steps:
             jump = min(self.rounds, steps - done)
             reg = Signal(value.shape(), name=f"{name}_s{start + done + jump}",
-                         reset_less=reset_less)
+                         reset_less=reset_less, attrs={"keep": 1} if keep else {})
             with self.m.If(self.first(start + done + jump - 1)):
                 self.m.d.sync += reg.eq(value)
             value, done = reg, done + jump

@@ -31,8 +31,24 @@ from .plan_timing import LR_STAGE_A, lr_stage_b, lr_timing
 
 #: Units served by one copy of the candidates' column and frame flag.
 LR_UNITS_PER_COPY = 8
+#: Units whose stores one copy of the write enable reaches. One register for all 63 was
+#: 819 flip-flop enables (census 5x5 at 1280 x 720, D = 64, R = 1, the largest fan-out of
+#: the core); the paper's D / R = 10 units keep their one.
+LR_UNITS_PER_WRITE = 12
 
 __all__ = ["LRCheck"]
+
+
+def _write_enables(slots, valid, stage_b, units):
+    """The right winners' write enable at ``stage_b``: ``valid`` (slot-aligned at 1) a
+    copy per :data:`LR_UNITS_PER_WRITE` units, from a register shared up to a clock before
+    (one copy when the units are that few: the Verilog is then as it was)."""
+    copies = -(-units // LR_UNITS_PER_WRITE)
+    if copies == 1:
+        return [slots.delay(valid, 1, stage_b - 1, "lr_writing")]
+    early = slots.delay(valid, 1, stage_b - 2, "lr_writing_early")
+    return [slots.delay(early, stage_b - 1, 1, f"lr_writing{k}", keep=True)
+            for k in range(copies)]
 
 
 def _primed(seen, depth):
@@ -180,7 +196,7 @@ class LRCheck(wiring.Component):
         # data were 6.7 ns (census 9x9 on ECP5).
         first_disparity = pipe(m, round_base(m, slots, 1, units), stage_b - 2,
                                "lr_first_disparity")
-        writing = slots.delay(tag.valid, 1, stage_b - 1, "lr_writing")
+        writing = _write_enables(slots, tag.valid, stage_b, units)
         last = slots.first(stage_b + rounds - 1) if rounds > 1 else Const(1)
         stores = [Store(m, f"right_winners{i}", entry, rounds) for i in range(units)]
         updated_words, framed_late = [], {}
@@ -231,14 +247,14 @@ class LRCheck(wiring.Component):
         for i, store in enumerate(stores):
             if i:
                 store.write(slots.phased_round(stage_b, i, f"right_winners{i}_write"),
-                            updated_words[i - 1], writing)
+                            updated_words[i - 1], writing[i // LR_UNITS_PER_WRITE])
             elif rounds > 1:
                 # The last unit's word j becomes unit 0's word j + 1 (none after R-1).
                 store.write(slots.phased_round(stage_b, 1, "right_winners0_write"),
-                            updated_words[-1], writing & ~last)
+                            updated_words[-1], writing[0] & ~last)
         leaving = Signal(name="right_final_valid")
         final = Signal(d_bits, name="right_final", reset_less=True)
-        m.d.sync += leaving.eq(writing & last)
+        m.d.sync += leaving.eq(writing[-1] & last)
         m.d.sync += final.eq(updated_words[-1].d)
         return final, leaving
 

@@ -76,8 +76,9 @@ def check(disparities, rounds, threshold, gaps, seed=1, height=3):
     return int(np.count_nonzero(got != expected))
 
 
+# 26 units at R = 1 and 2 x 13 at R = 2: three and two copies of the write enable.
 @pytest.mark.parametrize("disparities, rounds", [(4, 1), (8, 1), (8, 2), (12, 3), (16, 4),
-                                                 (6, 6)])
+                                                 (6, 6), (26, 1), (26, 2)])
 @pytest.mark.parametrize("threshold", [0, 1, None])
 def test_matches_golden(disparities, rounds, threshold):
     assert check(disparities, rounds, threshold, gaps=0.3) == 0
@@ -87,6 +88,18 @@ def test_broken_right_tie_rule_is_caught(monkeypatch):
     """``<=`` in the right-referenced WTA: equal costs going to the higher disparity."""
     monkeypatch.setattr(hdl_lr_check, "better", lambda candidate, held: candidate <= held)
     assert check(8, 2, 0, gaps=0.3) > 0
+
+
+def test_broken_write_enable_copy_is_caught(monkeypatch):
+    """One copy of the right winners' write enable a clock late: its units keep a stale
+    winner for a clock."""
+    original = hdl_lr_check._write_enables
+
+    def late_last_copy(slots, valid, stage_b, units):
+        copies = original(slots, valid, stage_b, units)
+        return copies[:-1] + [slots.delay(copies[-1], stage_b, 1, "late_copy")]
+    monkeypatch.setattr(hdl_lr_check, "_write_enables", late_last_copy)
+    assert check(26, 1, 0, gaps=0.3) > 0
 
 
 def test_broken_consistency_test_is_caught(monkeypatch):
