@@ -74,6 +74,24 @@ def stage_slots(width, height, stream, bubbles):
     return slots
 
 
+def drive_slot(ctx, dut, slot, j, stream, width, top, frame_inputs, random_inputs):
+    """Round ``j`` of ``slot`` at a stage's inputs: the slot clock, the tag and the round's
+    costs; a bubble or a position outside the frame gets random costs (and
+    ``random_inputs(ctx)``), a frame position ``frame_inputs(ctx, x, y, j)``."""
+    ctx.set(dut.first, j == 0)
+    ctx.set(dut.round, j)
+    if slot is not None and slot[0] == "frame":
+        _, x, y = slot
+        ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
+        frame_inputs(ctx, x, y, j)
+        return
+    x, y = (stream.randrange(width), 0) if slot is None else slot[1:]
+    ctx.set(dut.tag, {"x": x, "y": y, "valid": slot is not None, "live": 1})
+    for cost in dut.costs:
+        ctx.set(cost, stream.randrange(top + 1))
+    random_inputs(ctx)
+
+
 def check_stage(params, monkeypatch, seed, bubbles=0.3):
     """Stream a random volume through the stage alone; every S of the frame must be the
     golden model's. With the fifth path the sums of row y leave while row y + 2 streams in
@@ -101,26 +119,21 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
     assert dut.latency == plan_timing.aggregation_latency(params)
     latency, got = dut.latency, {}
 
+    def frame_inputs(ctx, x, y, j):
+        for i in range(units):
+            ctx.set(dut.costs[i], int(volume[y, x, j * units + i]))
+        for k, (dy, dx) in enumerate(GUIDE):
+            ctx.set(dut.guide[k], int(padded[y + dy + 1, x + dx + 1]))
+
+    def random_inputs(ctx):
+        for pixel in dut.guide:
+            ctx.set(pixel, stream.randrange(256))
+
     async def testbench(ctx):
         fill(ctx)
         for t in range(len(clocks) + latency):
             slot, j = clocks[t] if t < len(clocks) else (None, t % rounds)
-            ctx.set(dut.first, j == 0)
-            ctx.set(dut.round, j)
-            if slot is None or slot[0] != "frame":
-                x, y = (stream.randrange(width), 0) if slot is None else slot[1:]
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": slot is not None, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], stream.randrange(top + 1))
-                for k in range(len(GUIDE)):
-                    ctx.set(dut.guide[k], stream.randrange(256))
-            else:
-                _, x, y = slot
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], int(volume[y, x, j * units + i]))
-                for k, (dy, dx) in enumerate(GUIDE):
-                    ctx.set(dut.guide[k], int(padded[y + dy + 1, x + dx + 1]))
+            drive_slot(ctx, dut, slot, j, stream, width, top, frame_inputs, random_inputs)
             if t >= latency and clocks[t - latency][0] is not None:
                 (kind, x, y), j = clocks[t - latency]
                 if kind in ("frame", "below") and 0 <= y - late < height:

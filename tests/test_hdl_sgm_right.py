@@ -22,7 +22,7 @@ from npstereo.params import StereoParams
 from hdl_helpers import RESET, check_frames, frame_beats, simulate_and_compare
 from scenes import stereo_pair
 from test_hdl_plan import measured_flush, measured_period, planned_flush
-from test_hdl_sgm import check_stage, random_memories, stage_slots
+from test_hdl_sgm import check_stage, drive_slot, random_memories, stage_slots
 
 
 def right_params(transform, block, disparities, rounds, p1, p2, adapt, width, height):
@@ -57,24 +57,17 @@ def check_right(params, monkeypatch, seed, bubbles=0.3, mirrored=True, p2_of=Non
     dut = RightPathRecursion(params)
     latency, got = dut.latency, {}
 
+    def frame_inputs(ctx, x, y, j):
+        for i in range(units):
+            ctx.set(dut.costs[i], int(volume[y, column(x), j * units + i]))
+        ctx.set(dut.p2, int(penalties[y, column(x)]))
+
     async def testbench(ctx):
         fill(ctx)
         for t in range(len(clocks) + latency):
             slot, j = clocks[t] if t < len(clocks) else (None, t % rounds)
-            ctx.set(dut.first, j == 0)
-            ctx.set(dut.round, j)
-            if slot is None or slot[0] != "frame":
-                x, y = (stream.randrange(width), 0) if slot is None else slot[1:]
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": slot is not None, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], stream.randrange(top + 1))
-                ctx.set(dut.p2, stream.randrange(params.p2 + 1))
-            else:
-                _, x, y = slot
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
-                for i in range(units):
-                    ctx.set(dut.costs[i], int(volume[y, column(x), j * units + i]))
-                ctx.set(dut.p2, int(penalties[y, column(x)]))
+            drive_slot(ctx, dut, slot, j, stream, width, top, frame_inputs,
+                       lambda ctx: ctx.set(dut.p2, stream.randrange(params.p2 + 1)))
             if t >= latency and clocks[t - latency][0] is not None \
                     and clocks[t - latency][0][0] == "frame":
                 (_, x, y), j = clocks[t - latency]
