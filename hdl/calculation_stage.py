@@ -45,6 +45,9 @@ from .trees import DEFAULT_EVERY, build_min_tree, build_sum
 
 __all__ = ["CalculationStage"]
 
+#: Units whose pair flags (x - d >= n) one copy of x - j*D/R's flags and low bits feeds.
+UNITS_PER_PAIR_FLAGS = 12
+
 
 def _missing_cost(params):
     """The cost of a pair that does not exist (x - d < 0): 0 in a box sum, Cmax for SGM
@@ -388,11 +391,27 @@ class CalculationStage(wiring.Component):
         # one signed word with constants were five LUT levels for census 9x9 on ECP5).
         x_minus_round = Signal(range(-p.disparities, p.width), name="x_minus_round")
         m.d.sync += x_minus_round.eq(early.x - round_base(m, slots, start - 1, units))
-        all_pairs, some_pairs = Signal(name="all_pairs"), Signal(name="some_pairs")
-        m.d.sync += [all_pairs.eq(x_minus_round >= units), some_pairs.eq(x_minus_round >= 0)]
+        # A copy of the three per UNITS_PER_PAIR_FLAGS units (kept apart): one register of
+        # x's low bits reaching all 64 units' comparisons was census 5x5's critical path at
+        # 1280 x 720, D = 64, R = 1 (8.27 ns, 6.24 of it routing); the paper's D/R = 10
+        # units keep one.
+        groups = range(-(-units // UNITS_PER_PAIR_FLAGS))
+        if len(groups) == 1:
+            all_pairs, some_pairs = Signal(name="all_pairs"), Signal(name="some_pairs")
+            m.d.sync += [all_pairs.eq(x_minus_round >= units),
+                         some_pairs.eq(x_minus_round >= 0)]
+            all_pairs, some_pairs = [all_pairs], [some_pairs]
+        else:
+            all_pairs = [replica(m, x_minus_round >= units, f"all_pairs{k}") for k in groups]
+            some_pairs = [replica(m, x_minus_round >= 0, f"some_pairs{k}") for k in groups]
         if units > 1:
-            low = Signal(range(units), name="x_minus_round_low")
-            m.d.sync += low.eq(x_minus_round[:len(low)])
+            if len(groups) == 1:
+                low = Signal(range(units), name="x_minus_round_low")
+                m.d.sync += low.eq(x_minus_round[:len(low)])
+                low = [low]
+            else:
+                low = [replica(m, x_minus_round[:bits_for(units - 1)],
+                               f"x_minus_round_low{k}") for k in groups]
         if p.cost_term:
             # The cost term's x - d >= 2 of the last unit.
             beyond = Signal(name="all_pairs_beyond")
@@ -403,11 +422,12 @@ class CalculationStage(wiring.Component):
             x - d >= 0 is x - j*D/R >= 0 alone (a constant comparison fails Verilator's
             lint)."""
             flag = Signal(name=f"x_minus_d{i}_at_least{n}")
+            k = i // UNITS_PER_PAIR_FLAGS
             if i + n < units:
-                m.d.sync += flag.eq(all_pairs | (some_pairs & (low >= i + n)) if i + n else
-                                    some_pairs)
+                m.d.sync += flag.eq(all_pairs[k] | (some_pairs[k] & (low[k] >= i + n))
+                                    if i + n else some_pairs[k])
             else:
-                m.d.sync += flag.eq(all_pairs if i + n == units else beyond)
+                m.d.sync += flag.eq(all_pairs[k] if i + n == units else beyond)
             return flag
         rows_ok = []
         for k in range(self.rows):

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from npstereo.hdl import core as core_module
-from npstereo.hdl import evaluation_stage, input_stage, lr_check, plan_structure, trees, \
-    window_centre
+from npstereo.hdl import calculation_stage, evaluation_stage, input_stage, lr_check, \
+    plan_structure, trees, window_centre
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
 
@@ -108,6 +108,39 @@ def test_large_window_control(monkeypatch, transform, rounds):
     pairs = [stereo_pair("layers", 7, 20, 11), stereo_pair("independent", 7, 20, 12)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
                  valid_prob=GAPS, ready_prob=GAPS, seed=rounds)
+
+
+@pytest.mark.parametrize("rounds", [1, 2])
+def test_copied_pair_flags_and_write_enables(monkeypatch, rounds):
+    """Many units per round, at D = 8: the pair flags (x - d >= 0) and the L/R check's
+    write enable in a copy per 3 units, as D = 64 at R = 1 has them per 12: same frames,
+    back to back, with stalls."""
+    monkeypatch.setattr(calculation_stage, "UNITS_PER_PAIR_FLAGS", 3)
+    monkeypatch.setattr(lr_check, "LR_UNITS_PER_WRITE", 3)
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=rounds,
+                          lr_threshold=1, width=20, height=7)
+    pairs = [stereo_pair("layers", 7, 20, 15), stereo_pair("independent", 7, 20, 16)]
+    check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]),
+                 valid_prob=GAPS, ready_prob=GAPS, seed=rounds)
+
+
+def test_broken_pair_flag_copy_is_caught(monkeypatch):
+    """Broken variant: the last group's copy of "some pairs" stuck at 0, so that its units
+    (d = 6, 7) count as without a partner until x >= D: their costs at the first valid
+    column (x = 7) are zeroed, which the comparison with the golden model must see."""
+    monkeypatch.setattr(calculation_stage, "UNITS_PER_PAIR_FLAGS", 3)
+    original = calculation_stage.replica
+
+    def stuck(m, value, name, *args, **kwargs):
+        return original(m, value & 0 if name == "some_pairs2" else value, name, *args,
+                        **kwargs)
+    monkeypatch.setattr(calculation_stage, "replica", stuck)
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=1,
+                          lr_threshold=None, width=20, height=7)
+    pairs = [stereo_pair("layers", 7, 20, 15)]
+    with pytest.raises(AssertionError):
+        check_frames(params, pairs, frame_beats(*pairs[0]), valid_prob=GAPS,
+                     ready_prob=GAPS, seed=1)
 
 
 def test_spaced_popcount(monkeypatch):
