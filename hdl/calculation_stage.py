@@ -34,6 +34,7 @@ from .banks import line_memory
 from .common import SlotClock, Store, bits_for, pipe, replica, round_base, tag_layout
 from .cost_term import COLUMN_BITS, COST_TERM_CLOCKS, Ad3Term, right_column
 from .matching_cost import MatchingCost
+from .pair_flags import pair_flags
 from .plan_structure import (centre_copies, cost_rows, masks_after_compare, row_sum_plan,
                              store_slices, transformed_rows, vertical_bits, window_first_row,
                              window_pixels)
@@ -44,9 +45,6 @@ from .transform import Transform
 from .trees import DEFAULT_EVERY, build_min_tree, build_sum
 
 __all__ = ["CalculationStage"]
-
-#: Units whose pair flags (x - d >= n) one copy of x - j*D/R's flags and low bits feeds.
-UNITS_PER_PAIR_FLAGS = 12
 
 
 def _missing_cost(params):
@@ -386,49 +384,7 @@ class CalculationStage(wiring.Component):
         outside = _missing_cost(p)
         units, skews = p.per_round, self.skews
         last = skews[-1]
-        # x - j*D/R once, then per unit x - d >= 0 <=> x - j*D/R >= i, for i < D/R: beyond
-        # D/R every unit's pair exists, below it only the low bits decide (ten comparisons of
-        # one signed word with constants were five LUT levels for census 9x9 on ECP5).
-        x_minus_round = Signal(range(-p.disparities, p.width), name="x_minus_round")
-        m.d.sync += x_minus_round.eq(early.x - round_base(m, slots, start - 1, units))
-        # A copy of the three per UNITS_PER_PAIR_FLAGS units (kept apart): one register of
-        # x's low bits reaching all 64 units' comparisons was census 5x5's critical path at
-        # 1280 x 720, D = 64, R = 1 (8.27 ns, 6.24 of it routing); the paper's D/R = 10
-        # units keep one.
-        groups = range(-(-units // UNITS_PER_PAIR_FLAGS))
-        if len(groups) == 1:
-            all_pairs, some_pairs = Signal(name="all_pairs"), Signal(name="some_pairs")
-            m.d.sync += [all_pairs.eq(x_minus_round >= units),
-                         some_pairs.eq(x_minus_round >= 0)]
-            all_pairs, some_pairs = [all_pairs], [some_pairs]
-        else:
-            all_pairs = [replica(m, x_minus_round >= units, f"all_pairs{k}") for k in groups]
-            some_pairs = [replica(m, x_minus_round >= 0, f"some_pairs{k}") for k in groups]
-        if units > 1:
-            if len(groups) == 1:
-                low = Signal(range(units), name="x_minus_round_low")
-                m.d.sync += low.eq(x_minus_round[:len(low)])
-                low = [low]
-            else:
-                low = [replica(m, x_minus_round[:bits_for(units - 1)],
-                               f"x_minus_round_low{k}") for k in groups]
-        if p.cost_term:
-            # The cost term's x - d >= 2 of the last unit.
-            beyond = Signal(name="all_pairs_beyond")
-            m.d.sync += beyond.eq(x_minus_round >= units + 1)
-
-        def at_least(i, n):
-            """x - d >= n for unit i's d (0 <= n <= 2), a clock after the flags. Unit 0's
-            x - d >= 0 is x - j*D/R >= 0 alone (a constant comparison fails Verilator's
-            lint)."""
-            flag = Signal(name=f"x_minus_d{i}_at_least{n}")
-            k = i // UNITS_PER_PAIR_FLAGS
-            if i + n < units:
-                m.d.sync += flag.eq(all_pairs[k] | (some_pairs[k] & (low[k] >= i + n))
-                                    if i + n else some_pairs[k])
-            else:
-                m.d.sync += flag.eq(all_pairs[k] if i + n == units else beyond)
-            return flag
+        at_least = pair_flags(m, slots, early.x, start - 1, p, p.cost_term)
         rows_ok = []
         for k in range(self.rows):
             ok = Signal(name=f"cost_row_ok{k}")

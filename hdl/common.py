@@ -84,6 +84,36 @@ def replica(m, value, name, shape=None, enable=None, reset_less=False):
     return _loaded(m, reg, value, enable)
 
 
+#: Units (cost units, L/R units) that one copy of a control register reaches when a round
+#: has more of them: one register for all 64 units at D = 64, R = 1 was the critical path
+#: of census 5x5 at 1280 x 720 on ECP5 twice (the L/R check's write enable, 819 flip-flop
+#: enables; x's low bits into the pair flags, 8.27 ns). The paper's D/R = 10 keep one.
+UNITS_PER_CONTROL_COPY = 12
+
+
+def control_copies(units):
+    """Copies of a control register that ``units`` units take
+    (:data:`UNITS_PER_CONTROL_COPY` each); unit i takes copy i // UNITS_PER_CONTROL_COPY."""
+    return -(-units // UNITS_PER_CONTROL_COPY)
+
+
+def unit_copies(m, value, units, name):
+    """``value`` a clock later for each of ``units`` units (the list of each unit's copy):
+    one register ``name`` when :func:`control_copies` is one (the Verilog of a round of up
+    to :data:`UNITS_PER_CONTROL_COPY` units), else kept :func:`replica` copies."""
+    copies = control_copies(units)
+    if copies == 1:
+        registers = [_loaded(m, Signal(value.shape(), name=name), value, None)]
+    else:
+        registers = [replica(m, value, f"{name}{k}") for k in range(copies)]
+    return each_unit(registers, units)
+
+
+def each_unit(copies, units):
+    """Each of ``units`` units' copy among the :func:`control_copies` ``copies``."""
+    return [copies[i // UNITS_PER_CONTROL_COPY] for i in range(units)]
+
+
 def split_lanes(word, count, bits):
     """The ``count`` values of ``bits`` bits packed low to high in ``word``."""
     return [word[i * bits:(i + 1) * bits] for i in range(count)]

@@ -25,30 +25,28 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .common import SlotClock, Store, better, bits_for, pipe, register, replica, \
-    round_base, tag_layout
+from .common import SlotClock, Store, better, bits_for, control_copies, each_unit, pipe, \
+    register, replica, round_base, tag_layout
 from .plan_timing import LR_STAGE_A, lr_stage_b, lr_timing
 
 #: Units served by one copy of the candidates' column and frame flag.
 LR_UNITS_PER_COPY = 8
-#: Units whose stores one copy of the write enable reaches. One register for all 63 was
-#: 819 flip-flop enables (census 5x5 at 1280 x 720, D = 64, R = 1, the largest fan-out of
-#: the core); the paper's D / R = 10 units keep their one.
-LR_UNITS_PER_WRITE = 12
 
 __all__ = ["LRCheck"]
 
 
 def _write_enables(slots, valid, stage_b, units):
-    """The right winners' write enable at ``stage_b``: ``valid`` (slot-aligned at 1) a
-    copy per :data:`LR_UNITS_PER_WRITE` units, from a register shared up to a clock before
-    (one copy when the units are that few: the Verilog is then as it was)."""
-    copies = -(-units // LR_UNITS_PER_WRITE)
+    """The right winners' write enable at ``stage_b`` for each unit: ``valid``
+    (slot-aligned at 1) in :func:`~.common.control_copies` kept copies, from a register
+    shared up to a clock before (one copy when the units are few: the Verilog is then as
+    it was)."""
+    copies = control_copies(units)
     if copies == 1:
-        return [slots.delay(valid, 1, stage_b - 1, "lr_writing")]
+        return [slots.delay(valid, 1, stage_b - 1, "lr_writing")] * units
     early = slots.delay(valid, 1, stage_b - 2, "lr_writing_early")
-    return [slots.delay(early, stage_b - 1, 1, f"lr_writing{k}", keep=True)
-            for k in range(copies)]
+    registers = [slots.delay(early, stage_b - 1, 1, f"lr_writing{k}", keep=True)
+                 for k in range(copies)]
+    return each_unit(registers, units)
 
 
 def _primed(seen, depth):
@@ -247,7 +245,7 @@ class LRCheck(wiring.Component):
         for i, store in enumerate(stores):
             if i:
                 store.write(slots.phased_round(stage_b, i, f"right_winners{i}_write"),
-                            updated_words[i - 1], writing[i // LR_UNITS_PER_WRITE])
+                            updated_words[i - 1], writing[i])
             elif rounds > 1:
                 # The last unit's word j becomes unit 0's word j + 1 (none after R-1).
                 store.write(slots.phased_round(stage_b, 1, "right_winners0_write"),

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from npstereo.hdl import core as core_module
-from npstereo.hdl import calculation_stage, evaluation_stage, input_stage, lr_check, \
-    plan_structure, trees, window_centre
+from npstereo.hdl import common, evaluation_stage, input_stage, lr_check, plan_structure, \
+    trees, window_centre
 from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
 
@@ -115,8 +115,7 @@ def test_copied_pair_flags_and_write_enables(monkeypatch, rounds):
     """Many units per round, at D = 8: the pair flags (x - d >= 0) and the L/R check's
     write enable in a copy per 3 units, as D = 64 at R = 1 has them per 12: same frames,
     back to back, with stalls."""
-    monkeypatch.setattr(calculation_stage, "UNITS_PER_PAIR_FLAGS", 3)
-    monkeypatch.setattr(lr_check, "LR_UNITS_PER_WRITE", 3)
+    monkeypatch.setattr(common, "UNITS_PER_CONTROL_COPY", 3)
     params = StereoParams(transform="census", block=3, disparities=8, rounds=rounds,
                           lr_threshold=1, width=20, height=7)
     pairs = [stereo_pair("layers", 7, 20, 15), stereo_pair("independent", 7, 20, 16)]
@@ -128,13 +127,13 @@ def test_broken_pair_flag_copy_is_caught(monkeypatch):
     """Broken variant: the last group's copy of "some pairs" stuck at 0, so that its units
     (d = 6, 7) count as without a partner until x >= D: their costs at the first valid
     column (x = 7) are zeroed, which the comparison with the golden model must see."""
-    monkeypatch.setattr(calculation_stage, "UNITS_PER_PAIR_FLAGS", 3)
-    original = calculation_stage.replica
+    monkeypatch.setattr(common, "UNITS_PER_CONTROL_COPY", 3)
+    original = common.replica
 
     def stuck(m, value, name, *args, **kwargs):
         return original(m, value & 0 if name == "some_pairs2" else value, name, *args,
                         **kwargs)
-    monkeypatch.setattr(calculation_stage, "replica", stuck)
+    monkeypatch.setattr(common, "replica", stuck)
     params = StereoParams(transform="census", block=3, disparities=8, rounds=1,
                           lr_threshold=None, width=20, height=7)
     pairs = [stereo_pair("layers", 7, 20, 15)]
