@@ -256,6 +256,7 @@ class SgmTiming:
     left_stages: int    #: clocks of the loop's lane update (:func:`sgm_left_stages`)
     left_lu: int        #: Lu(x, .) in its register
     left_argmin: int    #: m(x) and argmin Lu(x, .) complete
+    left_argmin_split: bool  #: the argmin tree's comparisons and choices in clocks of their own
     left_early: int     #: m(0) and argmin C(0, .) complete (from the costs)
     left_hand: int      #: m(0) stored for the row's first J positions
     left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
@@ -272,11 +273,11 @@ def sgm_timing(params, every=DEFAULT_EVERY):
 
     The left path: the argmin over C(0, .) is complete at T + R (``left_early``); the loop
     reads at ``loop`` = T + :data:`SGM_LEFT_LEAD` + 1 and has Lu(x, .) in a register
-    ``left_stages`` later; its argmin at T + R after that. Position p registers b(p + k) as
-    early as both G(p + k - K) (``left_argmin`` of a position (K - k) slots back) and G(0)
-    allow; the asserts below are the margins of docs/hardware.md ("Semi-global
+    ``left_stages`` later; its argmin at T (2T with the tree split) + R after that.
+    Position p registers b(p + k) as early as both G(p + k - K) (``left_argmin`` of a
+    position (K - k) slots back) and G(0) allow; the asserts below are the margins of docs/hardware.md ("Semi-global
     aggregation"), which hold for every D <= 256 and R dividing D. L = Lu - m(x - 1)
-    leaves T + 2 clocks after Lu. The paths from above take :data:`SGM_ROW_CLOCKS`; the
+    leaves 2 clocks after m(x - 1). The paths from above take :data:`SGM_ROW_CLOCKS`; the
     three paths' L are summed by a tree (registered as ``every`` says, and at its root),
     and that sum and the left path's L by another.
     """
@@ -286,7 +287,6 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     early = tree + rounds
     loop = tree + SGM_LEFT_LEAD + 1
     lu = loop + stages
-    argmin = lu + tree + rounds
     hand = max(early + 1, loop - 1)
     # b(p + k) registered once G(p + k - K) and G(0) are there; it holds for R clocks, as
     # long as the first level of its multiplexer needs it: C(p, .) is delayed to it, and
@@ -295,16 +295,22 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # the column two clocks before), and the picked costs are read from their files a clock
     # before they are summed, where the margins below allow it: everywhere but at R = 1
     # with T = 8 (D > 128), where each takes one clock.
-    def picks_with(history):
+    def picks_with(argmin, history):
         return tuple(max(tree + 1, history, argmin + history - (age - k) * rounds)
                      for k in range(1, steps)) + (lu - 1,)
 
     def margins(picks, sum_clocks):
         return all(at + rounds + 2 <= k * rounds + loop - 1 - sum_clocks
                    for k, at in enumerate(picks[:-1], 1))
+    # The argmin tree over Lu(x, .) takes two clocks a level (the comparison, then the
+    # choice) where the margins still allow both two-clock multiplexers below: a level's
+    # 11-bit comparison and its choice of value and lane in one clock were census 7x7 SGM's
+    # recurring path at R = 10 (7.1-8.1 ns, 10-12 cells, in four placements of seven).
+    split = margins(picks_with(lu + 2 * tree + rounds, 2), 2)
+    argmin = lu + (2 if split else 1) * tree + rounds
     history, sum_clocks = next((h, s) for h in (2, 1) for s in (2, 1)
-                               if margins(picks_with(h), s))
-    picks = picks_with(history)
+                               if margins(picks_with(argmin, h), s))
+    picks = picks_with(argmin, history)
     # C(x - k, b(x)) in its file before position x reads it at loop - 1 - sum_clocks.
     assert margins(picks, sum_clocks), picks
     for k, at in enumerate(picks, 1):
@@ -312,14 +318,15 @@ def sgm_timing(params, every=DEFAULT_EVERY):
         assert at - history + (age - k) * rounds >= argmin, (k, at)
     # Lu(x - J, b) in its file before position x reads it at loop - 1.
     assert lu + rounds + 1 <= steps * rounds + loop - 1
-    left = lu + tree + 2
+    # m(x - 1) is there R clocks before argmin, and L = Lu - m(x - 1) leaves 2 clocks after.
+    left = argmin - rounds + 2
     rows = sgm_row_clocks(params)
     # The three paths from above are summed first (then wait for the left path as one
     # sum, not three L), then the left path's L is added.
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
-    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, early, hand, history,
-                     sum_clocks, picks, left, rows, rows + tree + rounds, summed)
+    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, split, early, hand,
+                     history, sum_clocks, picks, left, rows, rows + tree + rounds, summed)
 
 
 @dataclass(frozen=True)

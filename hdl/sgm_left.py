@@ -133,16 +133,37 @@ def _padded(values, count):
     return list(values) + [values[-1]] * (count - len(values))
 
 
-def _argmin(m, values, less, name):
+def _argmin(m, values, less, name, split=False):
     """(value, lane) of the smallest of ``values``, ties to the lowest lane: a tree with a
-    register after every level."""
+    register after every level, or with ``split`` two: the comparison (beside both items),
+    then the choice."""
     lane_bits = bits_for(len(values) - 1)
 
     def smaller(lower, upper):
         take = less(upper[0], lower[0])
         return Mux(take, upper[0], lower[0]), Mux(take, upper[1], lower[1])
     leaves = [(v, Const(i, lane_bits)) for i, v in enumerate(values)]
-    return build_tree(m, 1, leaves, smaller, register_plan(len(values), 1))
+    if not split:
+        return build_tree(m, 1, leaves, smaller, register_plan(len(values), 1))
+
+    def held(item, tag):
+        return tuple(register(m, v, len(v), f"{name}_{tag}_{j}") for j, v in enumerate(item))
+    items, level = leaves, 0
+    while len(items) > 1:
+        level += 1
+        chosen = []
+        for i in range(0, len(items), 2):
+            tag = f"{level}_{i // 2}"
+            if i + 1 == len(items):     # the odd one out waits both clocks
+                chosen.append(held(held(items[i], f"odd{tag}"), f"best{tag}"))
+                continue
+            lower, upper = items[i], items[i + 1]
+            take = register(m, less(upper[0], lower[0]), 1, f"{name}_take{tag}")
+            lower, upper = held(lower, f"lower{tag}"), held(upper, f"upper{tag}")
+            chosen.append(held((Mux(take, upper[0], lower[0]), Mux(take, upper[1], lower[1])),
+                               f"best{tag}"))
+        items = chosen
+    return items[0]
 
 
 def _running_argmin(owner, m, item, offset, less, name):
@@ -355,8 +376,8 @@ def left_path(owner, m, fresh, p2):
     lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
     # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
-    item = _argmin(m, lu, less, "sgm_left_lu_min")
-    minimum, best_round, best_lane = _running_argmin(owner, m, item, lu_at + tree, less,
+    item = _argmin(m, lu, less, "sgm_left_lu_min", t.left_argmin_split)
+    minimum, best_round, best_lane = _running_argmin(owner, m, item, argmin_at - rounds, less,
                                                      "sgm_left_lu_min")
     done = valid(argmin_at)
     # m(x) (and below the fresh start) in a copy per group of four lanes: one register of
