@@ -261,6 +261,7 @@ class SgmTiming:
     left_hand: int      #: m(0) stored for the row's first J positions
     left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
     left_sum_clocks: int  #: clocks from reading the picked costs C(x - k, b(x)) to their sum
+    left_start_early: bool  #: ref's start, Lu(x - J, b(x)) or m(0), chosen a clock early
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
@@ -318,6 +319,11 @@ def sgm_timing(params, every=DEFAULT_EVERY):
         assert at - history + (age - k) * rounds >= argmin, (k, at)
     # Lu(x - J, b) in its file before position x reads it at loop - 1.
     assert lu + rounds + 1 <= steps * rounds + loop - 1
+    # ... and a clock earlier, with m(0) (stored at ``hand`` of the row's first position),
+    # where the reference's start is chosen in a clock of its own: its file's multiplexer
+    # and the addition in one clock were census 7x7 SGM's path at R = 10 (7.57 ns).
+    start_early = (lu + rounds + 1 <= steps * rounds + loop - 2
+                   and hand + 1 <= rounds + loop - 2)
     # m(x - 1) is there R clocks before argmin, and L = Lu - m(x - 1) leaves 2 clocks after.
     left = argmin - rounds + 2
     rows = sgm_row_clocks(params)
@@ -326,7 +332,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, split, early, hand,
-                     history, sum_clocks, picks, left, rows, rows + tree + rounds, summed)
+                     history, sum_clocks, start_early, picks, left, rows, rows + tree + rounds, summed)
 
 
 @dataclass(frozen=True)

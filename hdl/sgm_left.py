@@ -403,7 +403,8 @@ def left_path(owner, m, fresh, p2):
 def _reference(owner, m, column, m0, p2, chosen, sums):
     """ref(x) + P2(x) in the clock ``loop`` - 1: the C(x - k, b(x)) that exist (x - k >= 1)
     read from their files ``timing.left_sum_clocks`` before, registered where that is two,
-    and added to P2, then Lu(x - J, b(x)), or m(0) for x <= J."""
+    and added to P2, then Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into
+    a register where ``timing.left_start_early``)."""
     t, steps = owner.timing, SGM_TRACK_STEPS
     bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
     at = t.loop - 1 - t.left_sum_clocks
@@ -423,9 +424,12 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
     while len(terms) > 1:   # a tree of additions, not a chain
         terms = [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
     total = register(m, terms[0][:bits], bits, "sgm_left_csum")
-    x = column(t.loop - 2)
+    early = t.left_start_early
+    x = column(t.loop - 2 - early)
     near = register(m, x <= steps, 1, "sgm_left_near")
     start = Mux(near, m0, Array(chosen)[register(m, x[:index], index, "sgm_left_chosen_at")])
+    if early:
+        start = register(m, start, bits, "sgm_left_start")
     return (start + total)[:bits]
 
 
