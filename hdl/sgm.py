@@ -246,8 +246,8 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         at 6 + j; the first lane of round j + 1 arrives a clock later, so the candidates
         L + P1 are formed at 8 + j, their comparisons at 9 + j, their minimum at 10 + j, its
         comparison with m + P2 and difference to m at 11 + j, the normalised step at
-        12 + j, and L = C + the step at 13 + j, which is written back to the position's own
-        column and goes into the minima.
+        12 + j, and L = C + the step at 13 + j, which goes into the minima and, from
+        registers of its own, back to the position's own column at 14 + j.
         """
         p, t, slots = self.params, self.timing, self._slots
         units, rounds, width = p.per_round, p.rounds, p.width
@@ -282,19 +282,23 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         # routing into the adder), a clock ahead, then copied for each few block RAMs
         # (banked_memory): the counter driving all 61 block RAMs' write addresses was the
         # next (9.77 ns).
+        # L is written a clock after t.rows, from registers of its own: L's registers into
+        # the block RAMs' data, beside the minimum trees and the sum, were census 7x7 SGM's
+        # path at R = 10 (the trees' first level, 6.72-7.16 ns, in two placements of four).
         write_count = Signal(range(depth), name="sgm_rows_write_count", reset_less=True)
         m.d.sync += write_count.eq(Mux(
-            slots.first(t.rows - 2),
-            self._aligned(own, 2, t.rows - 2, "sgm_rows_base"), write_count + 1))
-        written = {"top": Signal(2 * word_bits, name="sgm_rows_top_written"),
-                   "top_right": Signal(word_bits, name="sgm_rows_top_right_written")}
+            slots.first(t.rows - 1),
+            self._aligned(own, 2, t.rows - 1, "sgm_rows_base"), write_count + 1))
+        written = {"top": Signal(2 * word_bits, name="sgm_rows_top_written", reset_less=True),
+                   "top_right": Signal(word_bits, name="sgm_rows_top_right_written",
+                                       reset_less=True)}
         words = []
         for name, base in (("top", own), ("top_right", nxt)):
             address = Signal(range(depth), name=f"sgm_{name}_address_early")
             m.d.comb += address.eq(base + slots.round(2))
             words.append(banked_memory(m, f"sgm_rows_{name}", unsigned(len(written[name])),
                                        banks, address, write_count, written[name],
-                                       self._valid_at(t.rows - 1)))
+                                       self._valid_at(t.rows)))
         (top, top_left), top_right = split_lanes(words[0], 2, word_bits), words[1]
         # Top-left: the word the previous position read for its own column.
         # Its own copies of the round counter for the read and the write: the shared
@@ -365,7 +369,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             results[path] = [register(m, c + s, bits, f"{name}_l{i}")
                              for i, (c, s) in enumerate(zip(self._costs[t.rows - 1], step))]
 
-        m.d.comb += [written["top"].eq(Cat(*results["top"], *results["top-left"])),
+        m.d.sync += [written["top"].eq(Cat(*results["top"], *results["top-left"])),
                      written["top_right"].eq(Cat(*results["top-right"]))]
         # Their minima, once the last round's running minimum is complete.
         running = [self._running_min(m, results[path], t.rows,
