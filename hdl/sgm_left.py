@@ -42,7 +42,8 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import ShiftStore, Store, bits_for, register, replica, split_lanes, taps
+from .common import (LaneStores, ShiftStore, Store, bits_for, register, replica,
+                     split_lanes, taps)
 from .plan_timing import sgm_left_firsts_registered, sgm_left_shift_store
 from .trees import build_tree, register_plan
 
@@ -186,8 +187,6 @@ def _running_argmin(owner, m, item, offset, less, name):
 _LANES_PER_COPY = 8
 #: The same for m(x - 1) and the fresh start of the output's subtraction.
 _OUTPUT_LANES_PER_COPY = 4
-#: Lanes per LUT RAM of the loop's store (each with its own read address).
-_STORE_LANES = 4
 
 
 def _copies(m, value, shape, lanes, name, enable=None, per=_LANES_PER_COPY):
@@ -196,41 +195,6 @@ def _copies(m, value, shape, lanes, name, enable=None, per=_LANES_PER_COPY):
     groups = [replica(m, value, f"{name}_copy{k}", shape, enable, reset_less=True)
               for k in range(-(-lanes // per))]
     return [groups[i // per] for i in range(lanes)]
-
-
-class _LaneStores:
-    """The loop's store in LUT RAM: word j holds Lu and Lu + P1 of round j's lanes (the same
-    packing as :class:`~.common.ShiftStore`'s word), one RAM per group of
-    :data:`_STORE_LANES` lanes, each read at a round counter of its own: the shared counter
-    into the read address of all 2 D/R lanes' cells was census 7x7 SGM's path at R = 10 in
-    three placements of three (13-14 endpoints, wire only)."""
-
-    def __init__(self, m, slots, units, bits, rounds):
-        self.m, self.slots, self.bits = m, slots, bits
-        self.groups = [range(first, min(first + _STORE_LANES, units))
-                       for first in range(0, units, _STORE_LANES)]
-        self.stores = [Store(m, f"sgm_left_store{k}", unsigned(2 * len(g) * bits), rounds)
-                       for k, g in enumerate(self.groups)]
-
-    def read(self, offset):
-        """The word of round(``offset``), read a clock earlier into registers."""
-        centre, plus = [], []
-        for k, (group, store) in enumerate(zip(self.groups, self.stores)):
-            # Round ``offset`` is round ``offset - 1`` a clock later.
-            address = replica(self.m, self.slots.round(offset - 1), f"sgm_left_read_round{k}",
-                              reset_less=True)
-            lanes = split_lanes(register(self.m, store.read(address), 2 * len(group) * self.bits,
-                                         f"sgm_left_word{k}"), 2 * len(group), self.bits)
-            centre += lanes[:len(group)]
-            plus += lanes[len(group):]
-        return Cat(*centre, *plus)
-
-    def write(self, address, word, enable):
-        lanes = split_lanes(word, 2 * sum(map(len, self.groups)), self.bits)
-        units = len(lanes) // 2
-        for group, store in zip(self.groups, self.stores):
-            store.write(address, Cat(*(lanes[i] for i in group),
-                                     *(lanes[units + i] for i in group)), enable)
 
 
 def left_path(owner, m, fresh, p2):
@@ -294,8 +258,14 @@ def left_path(owner, m, fresh, p2):
         # RAM's read and + P1 in front of the comparisons were census 7x7 SGM's critical
         # path at R = 10 (9.44 ns, 106 MHz), the read, + P1 and the comparisons census 5x5
         # SGM's at 1280 x 720, D = 64, R = 4 (10.76 ns, 92.9 MHz).
-        store = _LaneStores(m, slots, units, bits, rounds)
-        word = store.read(loop - 1)
+        # One LUT RAM per few lanes, each read at a round counter of its own (round loop - 1
+        # is round loop - 2 a clock later): one counter into every lane's read address
+        # recurred in census 7x7 SGM's placements at R = 10 (13-14 endpoints, wire only).
+        store = LaneStores(m, "sgm_left_store", units, bits, rounds, sections=2)
+        word = register(m, store.read(lambda k: replica(m, slots.round(loop - 2),
+                                                        f"sgm_left_read_round{k}",
+                                                        reset_less=True)),
+                        2 * units * bits, "sgm_left_word")
     centre, plus = split_lanes(word, units, bits), split_lanes(word[units * bits:], units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
