@@ -377,8 +377,8 @@ def left_path(owner, m, fresh, p2):
 
 def _reference(owner, m, column, m0, p2, chosen, sums):
     """ref(x) + P2(x) in the clock ``loop`` - 1: the C(x - k, b(x)) that exist (x - k >= 1)
-    read from their files ``timing.left_sum_clocks`` before, registered where that is two,
-    and added to P2, then Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into
+    read from their files ``timing.left_sum_clocks`` before, registered where that is two
+    or three, and added to P2 (the first level of additions registered where three), then Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into
     a register where ``timing.left_start_early``)."""
     t, steps = owner.timing, SGM_TRACK_STEPS
     bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
@@ -392,12 +392,18 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
     terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
                  Array(entries)[register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
              for k, entries in enumerate(sums, 1)]
-    if t.left_sum_clocks == 2:
+    if t.left_sum_clocks >= 2:
         terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
                  for k, term in enumerate(terms, 1)]
-    terms.append(owner._aligned(p2, t.guide, t.loop - 2, "sgm_left_p2"))
+    # With three clocks the first level of additions is registered (P2 joins it).
+    first_level = t.left_sum_clocks == 3
+    terms.append(owner._aligned(p2, t.guide, t.loop - 2 - first_level, "sgm_left_p2"))
+    level = 0
     while len(terms) > 1:   # a tree of additions, not a chain
         terms = [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
+        if first_level and level == 0:
+            terms = [register(m, v, len(v), f"sgm_left_pair{k}") for k, v in enumerate(terms)]
+        level += 1
     total = register(m, terms[0][:bits], bits, "sgm_left_csum")
     early = t.left_start_early
     x = column(t.loop - 2 - early)

@@ -355,8 +355,15 @@ def test_any_rounds_dividing_d_are_built(disparities, rounds):
     plan.check_buildable(params)
     timing = plan_timing.sgm_timing(params)
     assert timing.left_stages == (1 if rounds < 3 else 2 if rounds == 3 else 3)
-    assert timing.left_history == (1 if (disparities, rounds) == (256, 1) else 2)
-    assert timing.left_sum_clocks == (1 if (disparities, rounds) == (256, 1) else 2)
+    # (argmin tree split, history clocks, sum clocks, start early): each as long as the
+    # margins allow; R = 1 at D >= 64 keeps the one-clock argmin levels, D = 256 the
+    # one-clock history and sum, one lane (D = R) two clocks for the sum.
+    expected = {(4, 1): (True, 2, 3, False), (64, 1): (False, 2, 2, False),
+                (256, 1): (False, 1, 1, False), (100, 5): (True, 2, 3, True),
+                (7, 7): (True, 2, 2, True), (256, 2): (True, 2, 3, True),
+                (9, 3): (True, 2, 3, True)}
+    assert (timing.left_argmin_split, timing.left_history, timing.left_sum_clocks,
+            timing.left_start_early) == expected[(disparities, rounds)]
 
 
 def test_narrow_sgm_frames_are_refused():
