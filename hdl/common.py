@@ -340,8 +340,7 @@ class LaneStores:
 
     def __init__(self, m, name, units, bits, depth, sections=1):
         self.bits, self.units, self.sections = bits, units, sections
-        self.groups = [range(first, min(first + LANES_PER_STORE, units))
-                       for first in range(0, units, LANES_PER_STORE)]
+        self.groups = lane_groups(units)
         self.stores = [Store(m, f"{name}{k}", unsigned(sections * len(g) * bits), depth)
                        for k, g in enumerate(self.groups)]
 
@@ -366,6 +365,12 @@ class LaneStores:
 
 #: Lanes per LUT RAM of a :class:`LaneStores`.
 LANES_PER_STORE = 4
+
+
+def lane_groups(units):
+    """The lanes of each LUT RAM of a :class:`LaneStores` of ``units`` lanes."""
+    return [range(first, min(first + LANES_PER_STORE, units))
+            for first in range(0, units, LANES_PER_STORE)]
 
 
 class ShiftStore:

@@ -7,11 +7,12 @@ rows in banks), what synthesis maps one by one to block RAM, LUT RAM or register
 (``gen/flow/block_rams.py`` counts the block RAMs from them before anything is built).
 """
 
+from collections import Counter
 from dataclasses import dataclass
 
 from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
 from .banks import ADDRESS_SLICE_BITS, slice_widths
-from .common import tag_layout
+from .common import lane_groups, tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, row_banks, store_slices,
                              vertical_bits, window_rows)
@@ -151,15 +152,20 @@ def sgm_memories(params):
                         layout=BANKED),
               MemoryUse("path rows (top-right)", 1, p.width * p.rounds, word, layout=BANKED),
               MemoryUse("path minima", 1, p.width, 3 * p.path_cost_bits, layout=LINES)]
+    # The left path's and the top-left stores: one LUT RAM per group of lanes
+    # (common.LaneStores).
+    sizes = Counter(len(group) for group in lane_groups(p.per_round))
     if not sgm_left_shift_store(p.rounds):
         # The fifth path's recursion has the left path's stores again.
         copies = 2 if p.fifth_path else 1
-        result += [MemoryUse("left path store", copies, p.rounds,
-                             2 * p.per_round * p.left_loop_bits, ASYNC),
-                   MemoryUse("left path first lanes", copies, p.rounds, p.left_loop_bits,
-                             ASYNC)]
+        result += [MemoryUse("left path store", copies * count, p.rounds,
+                             2 * lanes * p.left_loop_bits, ASYNC)
+                   for lanes, count in sorted(sizes.items())]
+        result.append(MemoryUse("left path first lanes", copies, p.rounds, p.left_loop_bits,
+                                ASYNC))
     if p.rounds > 1:
-        result.append(MemoryUse("top-left store", 1, p.rounds, word, ASYNC))
+        result += [MemoryUse("top-left store", count, p.rounds, lanes * p.path_cost_bits,
+                             ASYNC) for lanes, count in sorted(sizes.items())]
     if p.fifth_path:
         # hdl/sgm_right.py: a row of the costs (and the left path's P2 when adaptive), of
         # S4 and of S5, one word per (column, round).
