@@ -331,6 +331,16 @@ class Store:
                           self._write.en.eq(enable)]
 
 
+#: Lanes per LUT RAM of a :class:`LaneStores`.
+LANES_PER_STORE = 4
+
+
+def lane_groups(units):
+    """The lanes of each LUT RAM of a :class:`LaneStores` of ``units`` lanes."""
+    return [range(first, min(first + LANES_PER_STORE, units))
+            for first in range(0, units, LANES_PER_STORE)]
+
+
 class LaneStores:
     """A :class:`Store` of ``depth`` words of ``sections`` x ``units`` lanes of ``bits`` bits
     (packed section by section, lane by lane: Cat(*section0, *section1, ...)), kept as one
@@ -361,16 +371,6 @@ class LaneStores:
             store.write(address, Cat(*(lanes[section * self.units + i]
                                        for section in range(self.sections) for i in group)),
                         enable)
-
-
-#: Lanes per LUT RAM of a :class:`LaneStores`.
-LANES_PER_STORE = 4
-
-
-def lane_groups(units):
-    """The lanes of each LUT RAM of a :class:`LaneStores` of ``units`` lanes."""
-    return [range(first, min(first + LANES_PER_STORE, units))
-            for first in range(0, units, LANES_PER_STORE)]
 
 
 class ShiftStore:

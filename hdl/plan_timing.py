@@ -307,8 +307,9 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # choice) where the margins still allow both two-clock multiplexers below: a level's
     # 11-bit comparison and its choice of value and lane in one clock were census 7x7 SGM's
     # recurring path at R = 10 (7.1-8.1 ns, 10-12 cells, in four placements of seven).
-    split = margins(picks_with(lu + 2 * tree + rounds, 2), 2)
-    argmin = lu + (2 if split else 1) * tree + rounds
+    units = params.per_round
+    split = margins(picks_with(lu + min_tree_latency(units, True) + rounds, 2), 2)
+    argmin = lu + min_tree_latency(units, split) + rounds
     # Three clocks for the sum (the picked costs registered, the first level of additions
     # registered, then the last) where the margins allow them with the history's two: the
     # two levels of additions in one clock recurred in census 7x7 SGM's placements at

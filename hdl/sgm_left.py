@@ -45,7 +45,7 @@ from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import (LaneStores, ShiftStore, Store, bits_for, register, replica,
                      split_lanes, taps)
 from .plan_timing import sgm_left_firsts_registered, sgm_left_shift_store
-from .trees import build_tree, register_plan
+from .trees import build_min_tree
 
 __all__ = ["PathOwner", "left_path"]
 
@@ -136,35 +136,10 @@ def _padded(values, count):
 
 def _argmin(m, values, less, name, split=False):
     """(value, lane) of the smallest of ``values``, ties to the lowest lane: a tree with a
-    register after every level, or with ``split`` two: the comparison (beside both items),
-    then the choice."""
+    register after every level, two with ``split`` (:func:`~.trees.build_min_tree`)."""
     lane_bits = bits_for(len(values) - 1)
-
-    def smaller(lower, upper):
-        take = less(upper[0], lower[0])
-        return Mux(take, upper[0], lower[0]), Mux(take, upper[1], lower[1])
     leaves = [(v, Const(i, lane_bits)) for i, v in enumerate(values)]
-    if not split:
-        return build_tree(m, 1, leaves, smaller, register_plan(len(values), 1))
-
-    def held(item, tag):
-        return tuple(register(m, v, len(v), f"{name}_{tag}_{j}") for j, v in enumerate(item))
-    items, level = leaves, 0
-    while len(items) > 1:
-        level += 1
-        chosen = []
-        for i in range(0, len(items), 2):
-            tag = f"{level}_{i // 2}"
-            if i + 1 == len(items):     # the odd one out waits both clocks
-                chosen.append(held(held(items[i], f"odd{tag}"), f"best{tag}"))
-                continue
-            lower, upper = items[i], items[i + 1]
-            take = register(m, less(upper[0], lower[0]), 1, f"{name}_take{tag}")
-            lower, upper = held(lower, f"lower{tag}"), held(upper, f"upper{tag}")
-            chosen.append(held((Mux(take, upper[0], lower[0]), Mux(take, upper[1], lower[1])),
-                               f"best{tag}"))
-        items = chosen
-    return items[0]
+    return build_min_tree(m, 1, leaves, split, name, compare=less)
 
 
 def _running_argmin(owner, m, item, offset, less, name):
@@ -378,8 +353,9 @@ def left_path(owner, m, fresh, p2):
 def _reference(owner, m, column, m0, p2, chosen, sums):
     """ref(x) + P2(x) in the clock ``loop`` - 1: the C(x - k, b(x)) that exist (x - k >= 1)
     read from their files ``timing.left_sum_clocks`` before, registered where that is two
-    or three, and added to P2 (the first level of additions registered where three), then Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into
-    a register where ``timing.left_start_early``)."""
+    or three, and added to P2 (the first level of additions registered where three), then
+    Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into a register where
+    ``timing.left_start_early``)."""
     t, steps = owner.timing, SGM_TRACK_STEPS
     bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
     at = t.loop - 1 - t.left_sum_clocks
@@ -395,15 +371,15 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
     if t.left_sum_clocks >= 2:
         terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
                  for k, term in enumerate(terms, 1)]
+    def level(terms):       # a tree of additions, not a chain
+        return [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
     # With three clocks the first level of additions is registered (P2 joins it).
     first_level = t.left_sum_clocks == 3
     terms.append(owner._aligned(p2, t.guide, t.loop - 2 - first_level, "sgm_left_p2"))
-    level = 0
-    while len(terms) > 1:   # a tree of additions, not a chain
-        terms = [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
-        if first_level and level == 0:
-            terms = [register(m, v, len(v), f"sgm_left_pair{k}") for k, v in enumerate(terms)]
-        level += 1
+    if first_level:
+        terms = [register(m, v, len(v), f"sgm_left_pair{k}") for k, v in enumerate(level(terms))]
+    while len(terms) > 1:
+        terms = level(terms)
     total = register(m, terms[0][:bits], bits, "sgm_left_csum")
     early = t.left_start_early
     x = column(t.loop - 2 - early)
