@@ -1,7 +1,7 @@
 """Issue 27's second question: how fast can the left path's per-lane loop run on the ECP5?
 
 Usage: ``python docs/sgm/lane_loop_probe.py --lanes 64 --bits 11 --style onehot --out DIR``
-(one probe; ``--style`` tree, onehot or pipelined), placed and routed on the ECP5-85k with
+(one probe; ``--style`` one of STYLES), placed and routed on the ECP5-85k with
 the project's own flow (npstereo.gen.flow, nextpnr-ecp5 at 150 MHz); prints the figures.
 
 Once the large step's reference no longer needs the minimum of the previous position
@@ -20,7 +20,10 @@ loop is a minimum of four and an addition. Styles:
   of two positions);
 - ``presummed``: ``pipelined`` with the four sums C + candidate (and C + P1 + candidate)
   formed beside the comparisons and registered with the choice's one-hot selects, so
-  that the second clock is only the choice.
+  that the second clock is only the choice;
+- ``select``: ``presummed`` in one clock (carry-select): the comparisons and the sums
+  C + candidate side by side from the registers, then only the one-hot choice, C + Q and
+  C + P1 + Q formed a clock ahead per lane.
 
 The costs enter through one pin and a shift chain, the result leaves through a registered
 XOR tree, so the probe is self-contained and measures the loop, not its harness.
@@ -39,7 +42,7 @@ from amaranth.lib.wiring import In, Out
 from npstereo.gen.flow.synthesise import synthesise
 
 COST_BITS, P1, COPY_LANES = 6, 24, 8
-STYLES = ("tree", "onehot", "pipelined", "presummed")
+STYLES = ("tree", "onehot", "pipelined", "presummed", "select")
 
 
 def _less(a, b, bits):
@@ -117,6 +120,22 @@ class LaneLoop(wiring.Component):
                 pairs = [smaller(*candidates[:2]), *(
                     [smaller(*candidates[2:])] if len(candidates) == 4 else candidates[2:])]
                 best = pairs[0] if len(pairs) == 1 else smaller(*pairs)
+            elif self.style == "select":
+                # One clock: comparisons and sums side by side, then only the choice.
+                # The reference's sums are formed a clock ahead (Q is known ahead).
+                # (The probe's costs change every clock, so these registers have the
+                # loop's timing, not its arithmetic.)
+                q_sum = Signal(bits, name=f"qs{d}")
+                q_sum_p1 = Signal(bits, name=f"qp{d}")
+                m.d.sync += [q_sum.eq(self.reference[:bits] + costs[d]),
+                             q_sum_p1.eq(self.reference[:bits] + P1 + costs[d])]
+                selects = _one_hot(m, candidates, bits, False, f"min{d}")
+                sums = [costs[d] + c for c in candidates]
+                sums_p1 = [plus[d] + c for c in candidates]
+                sums[1], sums_p1[1] = q_sum, q_sum_p1
+                m.d.sync += [path[d].eq(_chosen(selects, sums)),
+                             path_p1[d].eq(_chosen(selects, sums_p1))]
+                continue
             elif self.style == "presummed":
                 selects = _registered(m, _one_hot(m, candidates, bits, False, f"min{d}"), 1,
                                       f"sel{d}_")
