@@ -23,7 +23,13 @@ loop is a minimum of four and an addition. Styles:
   that the second clock is only the choice;
 - ``select``: ``presummed`` in one clock (carry-select): the comparisons and the sums
   C + candidate side by side from the registers, then only the one-hot choice, C + Q and
-  C + P1 + Q formed a clock ahead per lane.
+  C + P1 + Q formed a clock ahead per lane;
+- ``pairs``: the loop of the left path whose steps into even columns only stay or take the
+  large step (docs/sgm.md, "Two clocks at R = 1"): Lu(x) from Lu(x - 2) in two clocks
+  with one position per clock, Lu(x) = S + min(Lu(x-2, d), Lu(x-2, d +- 1) + P1, Q(x-1),
+  Q(x) - C(x-1, d)), S = C(x-1, d) + C(x, d): the five candidates' comparisons and their
+  sums side by side, registered, then the one-hot choice; the sums of the two references
+  formed ahead per lane, the reference's copies one per two lanes.
 
 The costs enter through one pin and a shift chain, the result leaves through a registered
 XOR tree, so the probe is self-contained and measures the loop, not its harness.
@@ -42,7 +48,7 @@ from amaranth.lib.wiring import In, Out
 from npstereo.gen.flow.synthesise import synthesise
 
 COST_BITS, P1, COPY_LANES = 6, 24, 8
-STYLES = ("tree", "onehot", "pipelined", "presummed", "select")
+STYLES = ("tree", "onehot", "pipelined", "presummed", "select", "pairs")
 
 
 def _less(a, b, bits):
@@ -106,10 +112,22 @@ class LaneLoop(wiring.Component):
         if pipelined:
             m.d.sync += [lc.eq(c) for lc, c in zip(late, costs)]
         m.d.sync += [p.eq(c + P1) for p, c in zip(plus, late)]
-        copies = [Signal(bits, name=f"q{g}") for g in range(-(-n // COPY_LANES))]
+        # The copies are kept: identical registers would be merged back into one by
+        # synthesis (the core's ``replica`` does the same).
+        copies = [Signal(bits, name=f"q{g}", attrs={"keep": 1})
+                  for g in range(-(-n // COPY_LANES))]
         m.d.sync += [q.eq(self.reference[:bits]) for q in copies]
         path = [Signal(bits, name=f"l{d}") for d in range(n)]
         path_p1 = [Signal(bits, name=f"lp{d}") for d in range(n)]
+        if self.style == "pairs":
+            # S = C(x-1) + C(x) and S + P1 per lane, and Q(x-1) one copy per two lanes.
+            pair_sums = [Signal(bits, name=f"ps{d}") for d in range(n)]
+            pair_sums_p1 = [Signal(bits, name=f"pp{d}") for d in range(n)]
+            m.d.sync += [v.eq(c + late[d]) for d, (v, c) in enumerate(zip(pair_sums, costs))]
+            m.d.sync += [v.eq(c + plus[d]) for d, (v, c) in enumerate(zip(pair_sums_p1, costs))]
+            pair_copies = [Signal(bits, name=f"qq{g}", attrs={"keep": 1})
+                           for g in range(-(-n // 2))]
+            m.d.sync += [q.eq(self.reference[:bits]) for q in pair_copies]
         for d in range(n):
             candidates = [path[d], copies[d // COPY_LANES]]
             candidates += [path_p1[d - 1]] if d else []
@@ -133,6 +151,31 @@ class LaneLoop(wiring.Component):
                 sums = [costs[d] + c for c in candidates]
                 sums_p1 = [plus[d] + c for c in candidates]
                 sums[1], sums_p1[1] = q_sum, q_sum_p1
+                m.d.sync += [path[d].eq(_chosen(selects, sums)),
+                             path_p1[d].eq(_chosen(selects, sums_p1))]
+                continue
+            elif self.style == "pairs":
+                q_prev = pair_copies[d // 2]
+                q_adj = Signal(bits, name=f"qa{d}")       # Q(x) - C(x-1, d), formed ahead
+                m.d.sync += q_adj.eq(self.reference[:bits] - costs[d])
+                candidates = [path[d], q_prev, q_adj]
+                candidates += [path_p1[d - 1]] if d else []
+                candidates += [path_p1[d + 1]] if d < n - 1 else []
+                selects = _registered(m, _one_hot(m, candidates, bits, False, f"min{d}"), 1,
+                                      f"sel{d}_")
+                # Sums formed ahead for the references (their values are known ahead);
+                # the probe's costs change every clock: timing, not arithmetic.
+                ahead = [Signal(bits, name=f"qs{d}_{k}") for k in range(4)]
+                m.d.sync += [ahead[0].eq(self.reference[:bits] + pair_sums[d]),
+                             ahead[1].eq(self.reference[:bits] + pair_sums_p1[d]),
+                             ahead[2].eq(self.reference[:bits] + costs[d]),
+                             ahead[3].eq(self.reference[:bits] + plus[d])]
+                loop_sums = [pair_sums[d] + c for c in candidates[3:]]
+                loop_sums_p1 = [pair_sums_p1[d] + c for c in candidates[3:]]
+                sums = _registered(m, [pair_sums[d] + path[d], ahead[0], ahead[2], *loop_sums],
+                                   bits, f"s{d}_")
+                sums_p1 = _registered(m, [pair_sums_p1[d] + path[d], ahead[1], ahead[3],
+                                          *loop_sums_p1], bits, f"sp{d}_")
                 m.d.sync += [path[d].eq(_chosen(selects, sums)),
                              path_p1[d].eq(_chosen(selects, sums_p1))]
                 continue

@@ -13,7 +13,8 @@ Each variant below keeps the unnormalised path cost Lu of one row exact in integ
 with Lu = C for the first s columns, and differs only in the step s and in ref(x), the
 reference the large step is taken from (exact SGM: s = 1, ref(x) = min_d Lu(x - 1, d)):
 
-- ``exact``: ref(x) = min_d Lu(x - s, d) (s = 1 is golden/sgm.py bit for bit, checked);
+- ``exact``: ref(x) = min_d Lu(x - s, d) (s = 1 was golden/sgm.py bit for bit before the
+  tracked reference became the semantics; ``track 4 16`` is now, checked);
 - ``stale K``: ref(x) = min_d Lu(x - K s, d), the minimum of an older position;
 - ``comp K``: the stale minimum plus the smallest costs Cmin of the positions in between, a
   lower bound of the exact minimum;
@@ -43,9 +44,11 @@ from npstereo.golden.data import load_middlebury, read_image
 from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
-from npstereo.params import SGM_ROW_PATHS, StereoParams
+from npstereo.params import SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS, StereoParams
 
-#: (name, step s, kind, J, K) of every variant measured.
+#: (name, step s, kind, J, K[, parity]) of every variant measured; with a parity, the steps
+#: into the columns x with x % 2 == parity take no P1 transition (stay or the large step):
+#: the loop then closes over two positions (docs/sgm.md, "Two clocks at R = 1").
 VARIANTS = [("exact", 1, "exact", 0, 0),
             ("stale 8", 1, "stale", 0, 8), ("stale 12", 1, "stale", 0, 12),
             ("comp 2", 1, "comp", 0, 2), ("comp 4", 1, "comp", 0, 4),
@@ -53,14 +56,17 @@ VARIANTS = [("exact", 1, "exact", 0, 0),
             ("track 1 4", 1, "track", 1, 4), ("track 2 8", 1, "track", 2, 8),
             ("track 3 12", 1, "track", 3, 12), ("track 4 16", 1, "track", 4, 16),
             ("step 2, exact", 2, "exact", 0, 0), ("step 2, track 2 6", 2, "track", 2, 6),
-            ("step 3, exact", 3, "exact", 0, 0)]
+            ("step 3, exact", 3, "exact", 0, 0),
+            ("track 4 16, P1 into odd columns", 1, "track", 4, 16, 0),
+            ("track 4 16, P1 into even columns", 1, "track", 4, 16, 1),
+            ("track 8 32, P1 into odd columns", 1, "track", 8, 32, 0)]
 #: (transform, block, P1, P2, adaptive-P2 exponent): the default and census 5x5's best.
 CONFIGS = [("census", 7, 24, 79, 5), ("census", 5, 16, 96, 4)]
 NOISE = (0.0, 2e-4, 2e-3)
 SEEDS = (0, 1, 2)
 
 
-def left_path(volume, p1, p2_map, step, kind, j, k):
+def left_path(volume, p1, p2_map, step, kind, j, k, parity=None):
     """(L of the left path (H, W, D) int64, largest Lu(x, d) - min_d Lu(x, d))."""
     costs = volume.astype(np.int64).transpose(1, 0, 2)          # (W, H, D)
     width, height, _ = costs.shape
@@ -75,8 +81,9 @@ def left_path(volume, p1, p2_map, step, kind, j, k):
     for x in range(step, width):
         previous = path[x - step]
         candidates = previous.copy()
-        candidates[:, 1:] = np.minimum(candidates[:, 1:], previous[:, :-1] + p1)
-        candidates[:, :-1] = np.minimum(candidates[:, :-1], previous[:, 1:] + p1)
+        if parity is None or x % 2 != parity:
+            candidates[:, 1:] = np.minimum(candidates[:, 1:], previous[:, :-1] + p1)
+            candidates[:, :-1] = np.minimum(candidates[:, :-1], previous[:, 1:] + p1)
         first = x % step                                        # this step's first column
         if kind == "exact":
             ref = minima[x - step]
@@ -100,19 +107,19 @@ def left_path(volume, p1, p2_map, step, kind, j, k):
 
 def score(left, right, truth, disparities, config, variant):
     transform, block, p1, p2, adapt = config
-    _, step, kind, j, k = variant
+    _, step, kind, j, k, *parity = variant
     params = StereoParams(transform=transform, block=block, disparities=disparities)
     volume = sgm.cost_volume(left, right, params)
     rows = sum(sgm.path_costs(volume, path, p1, p2, guide=left, adapt=adapt,
                               max_cost=params.max_cost).astype(np.int64)
                for path in SGM_ROW_PATHS)
     left_costs, spread = left_path(volume, p1, sgm.path_p2(left, "left", p1, p2, adapt),
-                                   step, kind, j, k)
+                                   step, kind, j, k, *parity)
     summed = rows + left_costs
-    if (step, kind) == (1, "exact"):
+    if (step, kind, j, k, parity) == (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, []):
         golden = sgm.aggregate(volume, p1, p2, guide=left, adapt=adapt,
                                max_cost=params.max_cost)
-        assert np.array_equal(summed, golden), "the exact variant must be golden/sgm.py"
+        assert np.array_equal(summed, golden), f"{variant[0]} must be golden/sgm.py"
     disparity = sgm.disparity_from_summed(summed, 3).disparity
     return round(evaluate(disparity, truth, disparities).correct, 3), spread
 
