@@ -34,6 +34,10 @@ __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
 #: its output register, the window's shift, the masked window's register, a second
 #: register of the window and the centres' copies.
 INPUT_LATENCY = 5
+#: Registers every output word passes after ``CoreTiming.output`` besides the output queue
+#: and the port's register slice: its register into the queue and the slice by the queue
+#: (hdl/core.py).
+OUTPUT_REGISTERS = 2
 
 
 # The calculation stage and the box aggregation --------------------------------------------

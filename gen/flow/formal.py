@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ...hdl.plan_structure import output_width
-from ...hdl.plan_timing import core_timing, latency
+from ...hdl.plan_timing import OUTPUT_REGISTERS, core_timing, latency
 from ...params import ParameterError
 from ..atomic import atomic_path, write_text
 from .processes import run_tool
@@ -114,8 +114,9 @@ def check_provable(params):
 def quiet_clocks(params, group):
     """Clocks without input, sink ready, after which every word must be out: the input
     queue, the flush (``latency`` positions of R clocks), the pipeline to the output and
-    the output register slice; after misframing also the rest of the frame (FILL)."""
-    clocks = params.rounds * (latency(params) + 6) + core_timing(params).output + 8
+    the output registers and slices; after misframing also the rest of the frame (FILL)."""
+    clocks = params.rounds * (latency(params) + 6) + core_timing(params).output \
+        + OUTPUT_REGISTERS + 8
     if group == "misframed":
         clocks += params.width * params.height * params.rounds
     return clocks
@@ -123,10 +124,12 @@ def quiet_clocks(params, group):
 
 def first_word_clock(params):
     """A lower bound of the clock at which the first output word can come out after a
-    reset: the flush's positions at R clocks each and the pipeline to the output
-    (measured: census 3x3 D=2 R=1 3x2 bound 21, first word at clock 27; census 3x3 D=4
-    R=2 5x2 bound 64, first word at 72). A bounded check shorter than this sees no word."""
-    return params.rounds * latency(params) + core_timing(params).output
+    reset: the flush's positions at R clocks each, the pipeline to the output queue and
+    the registers on the way into it (measured before those registers: census 3x3 D=2 R=1
+    3x2 bound 21, first word at clock 27; census 3x3 D=4 R=2 5x2 bound 64, first word at
+    72; they add OUTPUT_REGISTERS clocks to both). A bounded check shorter than this sees
+    no word."""
+    return params.rounds * latency(params) + core_timing(params).output + OUTPUT_REGISTERS
 
 
 def default_depth(params):
