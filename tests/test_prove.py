@@ -80,7 +80,7 @@ def test_unbounded_proofs_with_median_and_subpixel(tmp_path, capsys):
     assert "output [15:0] m_axis_tdata" in (tmp_path / "core.v").read_text()
 
 
-#: The median's smallest core; its first word leaves at clock 39 at the earliest.
+#: The median's smallest core; its first word leaves at clock 41 at the earliest.
 MEDIAN = {**TINY, "median": True}
 
 
