@@ -174,7 +174,7 @@ class NpStereoCore(wiring.Component):
         # between the queue and the port's: the L/R check's pulse into the queue's LUT RAM
         # write (census 5x5 box at 1280 x 720, R = 1: 9.39 ns) and the port slice's skid
         # flag into the queue's read (census 7x7 box at 640 x 480, R = 1: 10.87 ns) each
-        # crossed the die in one clock.
+        # crossed the die in one clock. (plan_timing.OUTPUT_REGISTERS counts these two.)
         m.submodules.out_slice = out_slice = RegisterSlice(word.shape())
         wiring.connect(m, queue.r_stream, out_slice.sink)
         wiring.connect(m, out_slice.source, out_port.sink)

@@ -107,16 +107,17 @@ def left_path(volume, p1, p2_map, step, kind, j, k, parity=None):
 
 def score(left, right, truth, disparities, config, variant):
     transform, block, p1, p2, adapt = config
-    _, step, kind, j, k, *parity = variant
+    _, step, kind, j, k = variant[:5]
+    parity = variant[5] if len(variant) > 5 else None
     params = StereoParams(transform=transform, block=block, disparities=disparities)
     volume = sgm.cost_volume(left, right, params)
     rows = sum(sgm.path_costs(volume, path, p1, p2, guide=left, adapt=adapt,
                               max_cost=params.max_cost).astype(np.int64)
                for path in SGM_ROW_PATHS)
     left_costs, spread = left_path(volume, p1, sgm.path_p2(left, "left", p1, p2, adapt),
-                                   step, kind, j, k, *parity)
+                                   step, kind, j, k, parity)
     summed = rows + left_costs
-    if (step, kind, j, k, parity) == (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, []):
+    if (step, kind, j, k, parity) == (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, None):
         golden = sgm.aggregate(volume, p1, p2, guide=left, adapt=adapt,
                                max_cost=params.max_cost)
         assert np.array_equal(summed, golden), f"{variant[0]} must be golden/sgm.py"

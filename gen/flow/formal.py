@@ -115,8 +115,7 @@ def quiet_clocks(params, group):
     """Clocks without input, sink ready, after which every word must be out: the input
     queue, the flush (``latency`` positions of R clocks), the pipeline to the output and
     the output registers and slices; after misframing also the rest of the frame (FILL)."""
-    clocks = params.rounds * (latency(params) + 6) + core_timing(params).output \
-        + OUTPUT_REGISTERS + 8
+    clocks = first_word_clock(params) + 6 * params.rounds + 8
     if group == "misframed":
         clocks += params.width * params.height * params.rounds
     return clocks
