@@ -25,7 +25,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..params import (SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS,
+from ..params import (SGM_LEFT_P1_PARITY, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS,
                       SGM_TRACK_AGE, SGM_TRACK_STEPS, ParameterError, StereoParams,
                       check_penalties, check_sgm_paths)
 from .cost_term import add_cost_term
@@ -230,7 +230,7 @@ def _left_band(costs, p1, p2_map, out):
 
         Lu(x, d) = C(x, d) + min(Lu(x-1, d), Lu(x-1, d +- 1) + P1, ref(x) + P2(x)),
 
-    ref(x) from :func:`_tracked_reference`, and L(x, d) = Lu(x, d) - min_d Lu(x-1, d)
+    the P1 candidates only into columns x % 2 == ``SGM_LEFT_P1_PARITY``, ref(x) from :func:`_tracked_reference`, and L(x, d) = Lu(x, d) - min_d Lu(x-1, d)
     (L = Lu = C at x = 0). The recurrence runs along x, every row of the band at once;
     column-major copies make each step's (rows, D) slices contiguous.
     """
@@ -253,7 +253,7 @@ def _left_band(costs, p1, p2_map, out):
     for x in range(1, width):
         previous = path[x - 1]
         np.copyto(scratch, previous)
-        if disparities > 1:
+        if disparities > 1 and x % 2 == SGM_LEFT_P1_PARITY:
             np.minimum(scratch[:, 1:], previous[:, :-1] + p1, out=scratch[:, 1:])
             np.minimum(scratch[:, :-1], previous[:, 1:] + p1, out=scratch[:, :-1])
         reference = _tracked_reference(path, costs_t, best, x, index)

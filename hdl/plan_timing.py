@@ -208,13 +208,28 @@ SGM_LEFT_LEAD = 6
 
 
 
+def sgm_left_pairs(rounds):
+    """Whether the left path's loop spans two positions (R = 1): with the small step only
+    into odd columns (``params.SGM_LEFT_P1_PARITY``) Lu(x) of an even column is one minimum
+    over Lu(x - 2, .) and the two references, compared in one clock and chosen and added
+    in the next, while an odd column's Lu comes from the same comparisons outside the loop.
+    One position per clock leaves a one-position loop one clock (its comparison, choice and
+    addition in series: 81.8 MHz on ECP5, docs/sgm/lane_loop_probe.py); the two-position
+    loop two (149.7 MHz, its ``pairs`` style)."""
+    return rounds == 1
+
+
 def sgm_left_stages(rounds):
     """Clocks of the left path's lane update: round j + 1 of x - 1 is written R - 1 clocks
     before round j of x reads it, so the update may take up to R - 1 clocks. One clock
-    (comparisons, choice and addition) at R <= 2; the comparisons registered at R = 3; from
+    (comparisons, choice and addition) at R = 2; the comparisons registered at R = 3; from
     R = 4 the choice registered as well, so that each clock holds one carry chain or one
     multiplexer (the choice and the 11-bit addition were 9.6 ns in one clock,
-    docs/sgm/lane_loop_probe.py)."""
+    docs/sgm/lane_loop_probe.py). At R = 1 (:func:`sgm_left_pairs`) Lu is there three
+    clocks after the loop's read: an odd column compares a clock after its slot (Lu of
+    the even column before it is written then), then chooses and adds."""
+    if sgm_left_pairs(rounds):
+        return 3
     return min(max(rounds - 1, 1), 3)
 
 
@@ -238,8 +253,9 @@ def sgm_left_shift_store(rounds):
     with the gaps between positions, and R words of LUT RAM cost less than R words of
     flip-flops; there Lu(x - 1, round j), written in clock T - R + j + stages - 1 for the
     read of round j of x in clock T + j, is there two clocks early (stages + 1 <= R), and
-    the LUT RAM is read a clock early into a register."""
-    return sgm_left_stages(rounds) == 1
+    the LUT RAM is read a clock early into a register. At R = 1 the loop's state is Lu of
+    the last even column, one register per lane (:func:`sgm_left_pairs`)."""
+    return rounds == 2
 
 
 def sgm_tree_clocks(units):
@@ -258,6 +274,8 @@ class SgmTiming:
     guide: int          #: P2 of every path (slot-aligned)
     loop: int           #: the left path's loop reads Lu(x - 1, .) (ref + P2 is there)
     left_stages: int    #: clocks of the loop's lane update (:func:`sgm_left_stages`)
+    left_pairs: bool    #: the loop spans two positions (:func:`sgm_left_pairs`)
+    left_reference: int  #: ref(x) + P2(x) is loaded (there a clock later)
     left_lu: int        #: Lu(x, .) in its register
     left_argmin: int    #: m(x) and argmin Lu(x, .) complete
     left_argmin_split: bool  #: the argmin tree's comparisons and choices in clocks of their own
@@ -288,11 +306,14 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     """
     rounds, steps, age = params.rounds, SGM_TRACK_STEPS, SGM_TRACK_AGE
     tree = sgm_tree_clocks(params.per_round)
-    stages = sgm_left_stages(rounds)
+    stages, pairs = sgm_left_stages(rounds), sgm_left_pairs(rounds)
     early = tree + rounds
-    loop = tree + SGM_LEFT_LEAD + 1
+    # ref + P2 in the clock before the loop, two before a loop over two positions (which
+    # compares it with the costs' sum a clock earlier).
+    reference = tree + SGM_LEFT_LEAD
+    loop = reference + 1 + pairs
     lu = loop + stages
-    hand = max(early + 1, loop - 1)
+    hand = max(early + 1, reference)
     # b(p + k) registered once G(p + k - K) and G(0) are there; it holds for R clocks, as
     # long as the first level of its multiplexer needs it: C(p, .) is delayed to it, and
     # for k = J it is registered just before Lu(p, .).
@@ -305,7 +326,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
                      for k in range(1, steps)) + (lu - 1,)
 
     def margins(picks, sum_clocks):
-        return all(at + rounds + 2 <= k * rounds + loop - 1 - sum_clocks
+        return all(at + rounds + 2 <= k * rounds + reference - sum_clocks
                    for k, at in enumerate(picks[:-1], 1))
     # The argmin tree over Lu(x, .) takes two clocks a level (the comparison, then the
     # choice) where the margins still allow both two-clock multiplexers below: a level's
@@ -321,18 +342,18 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     history, sum_clocks = next((h, s) for h, s in ((2, 3), (2, 2), (2, 1), (1, 2), (1, 1))
                                if margins(picks_with(argmin, h), s))
     picks = picks_with(argmin, history)
-    # C(x - k, b(x)) in its file before position x reads it at loop - 1 - sum_clocks.
+    # C(x - k, b(x)) in its file before position x reads it at reference - sum_clocks.
     assert margins(picks, sum_clocks), picks
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
-    # Lu(x - J, b) in its file before position x reads it at loop - 1.
-    assert lu + rounds + 1 <= steps * rounds + loop - 1
+    # Lu(x - J, b) in its file before position x reads it at ``reference``.
+    assert lu + rounds + 1 <= steps * rounds + reference
     # ... and a clock earlier, with m(0) (stored at ``hand`` of the row's first position),
     # where the reference's start is chosen in a clock of its own: its file's multiplexer
     # and the addition in one clock were census 7x7 SGM's path at R = 10 (7.57 ns).
-    start_early = (lu + rounds + 1 <= steps * rounds + loop - 2
-                   and hand + 1 <= rounds + loop - 2)
+    start_early = (lu + rounds + 1 <= steps * rounds + reference - 1
+                   and hand + 1 <= rounds + reference - 1)
     # m(x - 1) is there R clocks before argmin, and L = Lu - m(x - 1) leaves 2 clocks after.
     left = argmin - rounds + 2
     rows = sgm_row_clocks(params)
@@ -340,7 +361,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # sum, not three L), then the left path's L is added.
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
-    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, lu, argmin, split, early, hand,
+    return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
                      history, sum_clocks, start_early, picks, left, rows,
                      rows + tree + rounds, summed)
 

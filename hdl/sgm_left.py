@@ -7,7 +7,8 @@ values compared differs by less than 2^(n-1), so the sign bit of an n-bit differ
 orders them.
 
 **The loop.** Per lane, Lu(x, d) = C(x, d) + min(Lu(x-1, d), Lu(x-1, d +- 1) + P1,
-ref(x) + P2(x)); Lu(x-1, .) of round j is word j of a store of R words (shifting
+ref(x) + P2(x)), the P1 candidates only into the columns of ``SGM_LEFT_P1_PARITY`` (a flag
+per group of lanes clears the comparisons they win and sets those they lose); Lu(x-1, .) of round j is word j of a store of R words (shifting
 registers at R <= 2, LUT RAM above), the neighbour d - 1 across the round's lower edge
 is the last lane of the word the previous round read (registered), the neighbour d + 1
 across the upper edge the first lane of word j + 1 (a store of its own). Round j + 1 of
@@ -41,7 +42,7 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
-from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
+from ..params import SGM_LEFT_P1_PARITY, SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import (LaneStores, ShiftStore, Store, bits_for, register, replica,
                      split_lanes, taps)
 from .plan_timing import sgm_left_firsts_registered, sgm_left_shift_store
@@ -84,12 +85,22 @@ def _less(a, b, bits):
     return (a - b)[bits - 1]
 
 
-def _minimum(candidates, bits):
+def _minimum(candidates, bits, small=None):
     """The smallest of ``candidates`` (ties to the first): all comparisons side by side,
-    then a one-hot choice. Returns (comparison bits, choice from them)."""
+    then a one-hot choice. Returns (comparison bits, choice from them).
+
+    With ``small`` (a flag), candidates 1 and 2 (the neighbours + P1) take part only where
+    it is set: there the comparisons they win are cleared and those they lose set, one more
+    input of the comparisons' LUTs, nothing in front of them."""
     count = len(candidates)
     beats = {(i, k): _less(candidates[i], candidates[k], bits)
              for i in range(count) for k in range(count) if i > k}
+    if small is not None:
+        for (i, k), bit in beats.items():
+            if k == 0 and i in (1, 2):
+                beats[(i, k)] = bit & small
+            elif i == 3 and k in (1, 2):
+                beats[(i, k)] = bit | ~small
 
     def choose(beats):
         value = Const(0, bits)
@@ -219,6 +230,51 @@ def left_path(owner, m, fresh, p2):
     chosen = _file(m, steps, bits, "sgm_left_v")
     sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
 
+    # ref(x) + P2(x), loaded at ``left_reference`` and held through the slot.
+    reference = _copies(m, _reference(owner, m, column, m0, p2, chosen, sums), bits, units,
+                        "sgm_left_ref", slots.first(t.left_reference))
+    update = _pair_update if t.left_pairs else _lane_update
+    lu = update(owner, m, reference, fresh_at, column)
+
+    # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
+    item = _argmin(m, lu, less, "sgm_left_lu_min", t.left_argmin_split)
+    minimum, best_round, best_lane = _running_argmin(owner, m, item, argmin_at - rounds, less,
+                                                     "sgm_left_lu_min")
+    done = valid(argmin_at)
+    # m(x) (and below the fresh start) in a copy per group of four lanes: one register of
+    # it into every lane's subtraction was census 7x7 SGM's path at R = 10 (7.19 ns, 5.54
+    # of it routing), one per eight lanes still 6.64 ns (4.49).
+    previous_m = _copies(m, minimum, bits, units, "sgm_left_m", done, _OUTPUT_LANES_PER_COPY)
+    # Each entry's write enable decoded a clock ahead into a register of its own: the slot
+    # pulse through the decoder into all K entries' enables was census 7x7 SGM's path at
+    # R = 10 (6.74 ns, 5.51 of it routing).
+    x = column(argmin_at - 1)
+    for k, entry in enumerate(history):
+        write = replica(m, valid(argmin_at - 1) & (x[:age.bit_length() - 1] == k),
+                        f"sgm_left_g_write{k}")     # a control bit, so it resets
+        with m.If(write):
+            m.d.sync += entry.eq(Cat(best_lane, best_round))
+    _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums)
+
+    # L(x, d) = Lu(x, d) - m(x - 1): Lu waits for m(x - 1).
+    out = t.left - 1
+    fresh_out = _copies(m, fresh_at(out - 1), 1, units, "sgm_left_fresh_out",
+                        per=_OUTPUT_LANES_PER_COPY)
+    delayed = [taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
+    return [register(m, (v - Mux(f, 0, mc))[:p.left_cost_bits], p.left_cost_bits,
+                     f"sgm_left_l{i}")
+            for i, (v, f, mc) in enumerate(zip(delayed, fresh_out, previous_m))]
+
+
+def _lane_update(owner, m, reference, fresh_at, column):
+    """Lu(x, .) per lane in a register at ``timing.left_lu`` from a loop over one position
+    (R >= 2; module docstring): round j of x reads Lu(x - 1, round j) at ``loop`` + j."""
+    p, t, slots = owner.params, owner.timing, owner._slots
+    units, rounds, bits, costs, loop = p.per_round, p.rounds, p.left_loop_bits, owner._costs, \
+        t.loop
+    # The small step only into the columns of SGM_LEFT_P1_PARITY (docs/semantics.md).
+    parity = owner.tag.x[0] if SGM_LEFT_P1_PARITY else ~owner.tag.x[0]
+    small = owner._lane_copies(m, parity, 0, loop, "sgm_left_small")
     # The loop: Lu(x - 1, .) of round j from the store at ``loop`` + j.
     # A word holds Lu and Lu + P1 of every lane (the + P1 added beside Lu, outside the
     # loop's path: the word's read, + P1 and the comparisons were census 7x7 SGM's
@@ -278,9 +334,6 @@ def left_path(owner, m, fresh, p2):
     else:
         below, above = plus[0], plus[units - 1]
     neighbours = [below, *plus, above]
-    # ref(x) + P2(x), loaded in the clock before round 0 and held through the slot.
-    reference = _copies(m, _reference(owner, m, column, m0, p2, chosen, sums), bits, units,
-                        "sgm_left_ref", slots.first(loop - 1))
     last = loop + t.left_stages - 1           # the clock that writes Lu(x, round j)
     # With the choice registered, a fresh start zeroes that register (its flip-flops'
     # synchronous reset) instead of a multiplexer behind it: the fresh flag's copy through
@@ -291,7 +344,7 @@ def left_path(owner, m, fresh, p2):
     lanes = []
     for i in range(units):
         candidates = [centre[i], neighbours[i], neighbours[i + 2], reference[i]]
-        beats, choose = _minimum(candidates, bits)
+        beats, choose = _minimum(candidates, bits, small[i])
         if t.left_stages >= 2:
             # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
             candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
@@ -318,36 +371,108 @@ def left_path(owner, m, fresh, p2):
         firsts.write(slots.round(last), first, owner._valid_at(last))
         if just_written is not None:
             m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
-    lu = [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
+    return [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
 
-    # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
-    item = _argmin(m, lu, less, "sgm_left_lu_min", t.left_argmin_split)
-    minimum, best_round, best_lane = _running_argmin(owner, m, item, argmin_at - rounds, less,
-                                                     "sgm_left_lu_min")
-    done = valid(argmin_at)
-    # m(x) (and below the fresh start) in a copy per group of four lanes: one register of
-    # it into every lane's subtraction was census 7x7 SGM's path at R = 10 (7.19 ns, 5.54
-    # of it routing), one per eight lanes still 6.64 ns (4.49).
-    previous_m = _copies(m, minimum, bits, units, "sgm_left_m", done, _OUTPUT_LANES_PER_COPY)
-    # Each entry's write enable decoded a clock ahead into a register of its own: the slot
-    # pulse through the decoder into all K entries' enables was census 7x7 SGM's path at
-    # R = 10 (6.74 ns, 5.51 of it routing).
-    x = column(argmin_at - 1)
-    for k, entry in enumerate(history):
-        write = replica(m, valid(argmin_at - 1) & (x[:age.bit_length() - 1] == k),
-                        f"sgm_left_g_write{k}")     # a control bit, so it resets
-        with m.If(write):
-            m.d.sync += entry.eq(Cat(best_lane, best_round))
-    _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums)
 
-    # L(x, d) = Lu(x, d) - m(x - 1): Lu waits for m(x - 1).
-    out = t.left - 1
-    fresh_out = _copies(m, fresh_at(out - 1), 1, units, "sgm_left_fresh_out",
-                        per=_OUTPUT_LANES_PER_COPY)
-    delayed = [taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
-    return [register(m, (v - Mux(f, 0, mc))[:p.left_cost_bits], p.left_cost_bits,
-                     f"sgm_left_l{i}")
-            for i, (v, f, mc) in enumerate(zip(delayed, fresh_out, previous_m))]
+def _pair_update(owner, m, reference, fresh_at, column):
+    """Lu(x, .) per lane in a register at ``timing.left_lu`` from a loop over two positions
+    (R = 1, ``plan_timing.sgm_left_pairs``; docs/hardware.md, "The left path at R = 1").
+
+    With the small step only into odd columns, an even column x has
+
+        Lu(x) = min(S + Lu(x-2, d), S + Lu(x-2, d +- 1) + P1, S + Q(x-1), C(x) + Q(x)),
+
+    S = C(x-1, d) + C(x, d) and Q = ref + P2: the five candidates are compared as
+    Lu(x-2, d), Lu(x-2, d +- 1) + P1, Q(x-1) and Q(x) - C(x-1, d) in the clock ``loop``
+    (those among the first four in every clock, from registers), and chosen and added to S
+    in the next: the loop's state, Lu of the last even column, is read two clocks after it
+    is written. An odd column x' takes the first four's comparisons a clock after its slot
+    (Lu(x' - 1) is written then) and chooses and adds C(x') in the next, outside the loop.
+    Every register below is written only in slots with a position (gaps hold them).
+    """
+    p, t, slots = owner.params, owner.timing, owner._slots
+    units, bits, costs, loop = p.per_round, p.left_loop_bits, owner._costs, t.loop
+    assert t.left_reference == loop - 2 and t.left_lu == loop + 3
+
+    def less(a, b):
+        return _less(a, b, bits)
+
+    def lane_registers(name, shape=bits):
+        return [Signal(shape, name=f"{name}{i}", reset_less=True) for i in range(units)]
+
+    def odd_at(offset):
+        value = owner.tag.x[0] if SGM_LEFT_P1_PARITY else ~owner.tag.x[0]
+        return owner._aligned(value, 0, offset, "sgm_left_odd")
+
+    def even_at(offset):
+        return owner._valid_at(offset) & ~odd_at(offset)
+
+    def lanes_at(flag, offset, name):
+        """A flag (a function of the offset) slot-aligned at ``offset``, a copy per group
+        of lanes."""
+        return owner._lane_copies(m, flag(offset - 1), offset - 1, offset, name)
+
+    # The clock before the loop's comparisons (``loop`` - 1): ref + P2 holds Q(x); C(x - 1)
+    # and Q(x - 1) are the last position's, kept across gaps.
+    before = loop - 1
+    valid = owner._valid_at(before)
+    last_costs = [_last_position(m, c, valid, f"sgm_left_last_cost{i}")
+                  for i, c in enumerate(costs[before])]
+    last_q = _last_position(m, reference[0], valid, "sgm_left_last_q")
+    fresh = lanes_at(fresh_at, before, "sgm_left_pair_fresh")
+    # Lu(x - 2) and Lu(x - 2) + P1 (the loop's state), S and S + P1, Q(x) - C(x - 1).
+    state, state_plus = lane_registers("sgm_left_even"), lane_registers("sgm_left_even_plus")
+    pair, pair_plus = lane_registers("sgm_left_pair_sum"), lane_registers("sgm_left_pair_plus")
+    late_q = lane_registers("sgm_left_late_q")
+    costs_plus = [register(m, c + p.p1, p.cost_bits + 1, f"sgm_left_cost_plus{i}")
+                  for i, c in enumerate(costs[before - 1])]
+    even_lanes = lanes_at(even_at, before, "sgm_left_even_write")
+    for i in range(units):
+        here, held = costs[before][i], Mux(fresh[i], 0, last_costs[i])
+        # A fresh start: S = C(x), and Q(x) - C(x - 1) = 0 wins (below).
+        with m.If(even_lanes[i]):
+            m.d.sync += [pair[i].eq(held + here), pair_plus[i].eq(held + costs_plus[i]),
+                         late_q[i].eq(Mux(fresh[i], 0, reference[i] - last_costs[i]))]
+    # Q of the last odd column, for its own choice and for the even column after it.
+    odd_q = _copies(m, last_q, bits, units, "sgm_left_odd_q",
+                    owner._valid_at(loop) & odd_at(loop))
+
+    # The comparisons among Lu(x - 2, d), Lu(x - 2, d -+ 1) + P1 and Q(x - 1), every clock;
+    # outside 0 .. D-1 the lane itself stands in (Lu(d) + P1 never beats Lu(d)).
+    neighbours = [state_plus[0], *state_plus, state_plus[units - 1]]
+    fresh_loop = lanes_at(fresh_at, loop, "sgm_left_loop_fresh")
+    candidates, beats = [], []
+    for i in range(units):
+        four = [state[i], neighbours[i], neighbours[i + 2], odd_q[i]]
+        among, _ = _minimum(four, bits)
+        among = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
+                 for key, b in among.items()}
+        # ... and Q(x) - C(x - 1) against them, in the loop's clock (always at a fresh start).
+        late = {(4, k): register(m, less(late_q[i], c) | fresh_loop[i], 1,
+                                 f"sgm_left_beats{i}_4{k}") for k, c in enumerate(four)}
+        candidates.append(four + [late_q[i]])
+        beats.append({**among, **late})
+
+    # The choices: the even column's over five (the loop), an odd column's over four.
+    write = lanes_at(even_at, loop + 1, "sgm_left_state_write")
+    odd_out = lanes_at(odd_at, loop + 2, "sgm_left_odd_out")
+    lu = []
+    for i in range(units):
+        _, choose = _minimum(candidates[i], bits)
+        best = choose(beats[i])
+        with m.If(write[i]):
+            m.d.sync += [state[i].eq((pair[i] + best)[:bits]),
+                         state_plus[i].eq((pair_plus[i] + best)[:bits])]
+        _, choose = _minimum(candidates[i][:4], bits)
+        odd = (costs[loop + 2][i] + choose(beats[i]))[:bits]
+        lu.append(register(m, Mux(odd_out[i], odd, state[i]), bits, f"sgm_left_lu{i}"))
+    return lu
+
+
+def _last_position(m, value, valid, name):
+    """``value`` of the last slot with a position (``valid`` set), a clock later: what the
+    loop over two positions keeps of x - 1 across the gaps before x."""
+    return register(m, value, len(value), name, valid)
 
 
 def _reference(owner, m, column, m0, p2, chosen, sums):
@@ -358,7 +483,7 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
     ``timing.left_start_early``)."""
     t, steps = owner.timing, SGM_TRACK_STEPS
     bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
-    at = t.loop - 1 - t.left_sum_clocks
+    at = t.left_reference - t.left_sum_clocks
     # Which entries exist and where they are, from the column a clock ahead (a slot-aligned
     # value holds for the slot's R clocks, so the registers hold this position's): the
     # subtractions and comparisons in front of the files' multiplexers and the additions
@@ -375,14 +500,15 @@ def _reference(owner, m, column, m0, p2, chosen, sums):
         return [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
     # With three clocks the first level of additions is registered (P2 joins it).
     first_level = t.left_sum_clocks == 3
-    terms.append(owner._aligned(p2, t.guide, t.loop - 2 - first_level, "sgm_left_p2"))
+    terms.append(owner._aligned(p2, t.guide, t.left_reference - 1 - first_level,
+                                 "sgm_left_p2"))
     if first_level:
         terms = [register(m, v, len(v), f"sgm_left_pair{k}") for k, v in enumerate(level(terms))]
     while len(terms) > 1:
         terms = level(terms)
     total = register(m, terms[0][:bits], bits, "sgm_left_csum")
     early = t.left_start_early
-    x = column(t.loop - 2 - early)
+    x = column(t.left_reference - 1 - early)
     near = register(m, x <= steps, 1, "sgm_left_near")
     start = Mux(near, m0, Array(chosen)[register(m, x[:index], index, "sgm_left_chosen_at")])
     if early:

@@ -19,7 +19,8 @@ from .cost_terms import (AD3_DEFAULT_P2, COST_TERMS, check_cost_term, term_max)
 from .errors import ParameterError, UserError, is_int, is_integral
 from .sgm import (P2_ADAPT_OFF, SGM, SGM_DEFAULT_ADAPT, SGM_DEFAULT_P1, SGM_DEFAULT_P2,
                   SGM_MAX_ADAPT, SGM_PATH_COUNT, SGM_PATH_STEPS, SGM_PATHS, SGM_RECOMMENDED,
-                  SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS, check_penalties,
+                  SGM_LEFT_P1_PARITY, SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS,
+                  check_penalties,
                   check_sgm_paths, max_path_penalty, sgm_left_cost_bits, sgm_left_loop_bits,
                   sgm_path_cost_bits, sgm_path_steps, sgm_summed_cost_bits)
 from .transforms import (REDUCTIONS, TRANSFORM_SPECS, TRANSFORMS, TransformSpec,
@@ -31,7 +32,7 @@ __all__ = ["TransformSpec", "TRANSFORM_SPECS", "TRANSFORMS", "REDUCTIONS",
            "SGM_DEFAULT_P1", "SGM_DEFAULT_P2", "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT",
            "P2_ADAPT_OFF", "SGM_RECOMMENDED", "UserError", "ParameterError", "StereoParams",
            "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
-           "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
+           "SGM_LEFT_P1_PARITY", "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
            "sgm_summed_cost_bits", "MEDIAN_FILL", "MAX_SUBPIXEL_BITS", "COST_TERMS",
            "default_p2"]
 

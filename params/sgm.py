@@ -13,6 +13,7 @@ __all__ = ["SGM", "sgm_path_steps", "SGM_PATH_STEPS", "SGM_PATHS", "SGM_PATH_COU
            "SGM_ROW_PATHS", "check_sgm_paths", "SGM_DEFAULT_P1", "SGM_DEFAULT_P2",
            "SGM_DEFAULT_ADAPT", "SGM_MAX_ADAPT", "P2_ADAPT_OFF", "SGM_RECOMMENDED",
            "max_path_penalty", "check_penalties", "SGM_TRACK_STEPS", "SGM_TRACK_AGE",
+           "SGM_LEFT_P1_PARITY",
            "sgm_path_cost_bits", "sgm_left_cost_bits", "sgm_left_loop_bits",
            "sgm_summed_cost_bits"]
 
@@ -66,12 +67,21 @@ def check_sgm_paths(paths):
 #: costs of b in between. Exact SGM's reference, the minimum over all D path costs of the
 #: position just before, cannot close at one position per clock; this one needs nothing
 #: newer than J positions back. Why these values: at one position per clock (R = 1) the
-#: K - J = 12 positions cover the registered argmin tree over D <= 256 (8 levels) and its
-#: hand-off, and the J positions the registers of the multiplexer that picks lane b and the
-#: final additions. docs/sgm/left_path_study.py measured J = 4, K = 16 within 0.05 points
-#: of exact SGM (docs/sgm.md, "The left path's reference").
-SGM_TRACK_STEPS = 4
-SGM_TRACK_AGE = 16
+#: loop spans two positions (:data:`SGM_LEFT_P1_PARITY`) and compares ref(x) a clock before
+#: a one-position loop would, so J = 8 positions cover the registers of the multiplexer
+#: that picks lane b, the final additions and that clock, and the K - J = 24 the registered
+#: argmin tree over D <= 256 and its hand-off. docs/sgm/left_path_study.py measured J = 8,
+#: K = 32 with P1 into odd columns within 0.14 points of J = 4, K = 16 with P1 into every
+#: column (docs/sgm.md, "Two clocks at R = 1").
+SGM_TRACK_STEPS = 8
+SGM_TRACK_AGE = 32
+
+#: The left path's small step (P1, d +- 1) is taken only into the columns x with
+#: x % 2 == SGM_LEFT_P1_PARITY; into the others the path stays at d or takes the large step.
+#: Then Lu(x) of an even column depends on Lu(x - 2) through one comparison of neighbours,
+#: not two, and the loop closes over two positions in two clocks at one position per clock
+#: (docs/semantics.md, "The left path").
+SGM_LEFT_P1_PARITY = 1
 
 #: The recommended SGM penalties, chosen by measurement together with census 7x7
 #: (docs/quality.md, "SGM: choosing the defaults"): P1, P2 and the adaptive-P2 exponent t.
@@ -169,10 +179,12 @@ def sgm_left_loop_bits(max_cost, p1, p2):
     """Width n of the hardware's unnormalised left path cost Lu, kept modulo 2^n.
 
     All values a step compares lie in [m(x-1), m(x-1) + K Cmax + P2 + P1], and the values of
-    one position in [m(x-1), m(x-1) + K Cmax + P2]: every difference is below 2^(n-1), so
-    the sign bit of an n-bit difference orders them (docs/semantics.md, "Widths").
+    one position in [m(x-1), m(x-1) + K Cmax + P2]; the loop over two positions at R = 1
+    compares the candidates of Lu(x - 1) plus C(x - 1) with ref(x) + P2(x), one Cmax more.
+    Every difference is below 2^(n-1), so the sign bit of an n-bit difference orders them
+    (docs/semantics.md, "Widths").
     """
-    return (_left_bound(max_cost, p2) + int(p1)).bit_length() + 1
+    return (_left_bound(max_cost, p2) + int(max_cost) + int(p1)).bit_length() + 1
 
 
 def sgm_summed_cost_bits(max_cost, p2, fifth_path=False):

@@ -149,12 +149,12 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
 STAGES = [
     # transform, block, D, R, P1, P2, t, width, height
     ("census", 3, 8, 8, 3, 20, 2, 10, 5),            # one lane, R = D
-    ("census", 3, 4, 1, 3, 20, 2, 22, 3),            # R = 1: four lanes, one clock a position
-    ("census", 5, 8, 1, 16, 96, 4, 20, 3),           # R = 1, eight lanes (T = 3)
-    ("census", 5, 16, 2, 16, 96, 4, 20, 3),          # R = 2, eight lanes, shifting stores
+    ("census", 3, 4, 1, 3, 20, 2, 40, 3),            # R = 1: four lanes, one clock a position
+    ("census", 5, 8, 1, 16, 96, 4, 38, 3),           # R = 1, eight lanes (T = 3)
+    ("census", 5, 16, 2, 16, 96, 4, 36, 3),          # R = 2, eight lanes, shifting stores
     ("census", 3, 24, 8, 4, 20, None, 26, 3),        # three lanes, constant P2
-    ("rank", 5, 15, 3, 7, 40, 5, 19, 3),             # R = 3: two-clock update, store read early
-    ("census", 3, 8, 4, 3, 20, 2, 12, 3),            # R = 4: the three-clock update
+    ("rank", 5, 15, 3, 7, 40, 5, 36, 3),             # R = 3: two-clock update, store read early
+    ("census", 3, 8, 4, 3, 20, 2, 35, 3),            # R = 4: the three-clock update
     ("rank", 3, 10, 5, 7, 40, 5, 14, 3),             # R = 5: the first lanes' read registered
     ("ext-rank", 3, 12, 12, 0, 0, None, 14, 4),      # P1 = P2 = 0, 11-bit path costs
     ("ext-census", 3, 6, 2, 2000, 6151, 1, 21, 3),   # P2 = P2max, t = 1, wide Lu
@@ -186,15 +186,44 @@ def test_broken_variant_baseline_matches(monkeypatch):
 def test_broken_left_reference_is_caught(monkeypatch):
     """The left path's large step left out of its minimum (ref + P2 never taken)."""
     real = sgm_left._minimum
-    monkeypatch.setattr(sgm_left, "_minimum", lambda candidates, bits:
-                        real(candidates[:3], bits))
+    monkeypatch.setattr(sgm_left, "_minimum", lambda candidates, bits, small=None:
+                        real(candidates[:3], bits, small))
     assert_stage_caught(monkeypatch)
+
+
+def test_broken_left_parity_is_caught(monkeypatch):
+    """The left path's small step into every column (the parity flag ignored)."""
+    real = sgm_left._minimum
+    monkeypatch.setattr(sgm_left, "_minimum", lambda candidates, bits, small=None:
+                        real(candidates, bits))
+    assert_stage_caught(monkeypatch)
+
+
+def test_broken_left_pairs_gap_is_caught(monkeypatch):
+    """R = 1, the loop over two positions: C(x - 1) and Q(x - 1) taken from the slot before
+    x instead of the last position (a gap between x - 1 and x breaks them)."""
+    params = sgm_params("census", 3, 4, 1, 3, 20, 2, width=40, height=3)
+    check_stage(params, monkeypatch, seed=7)
+    monkeypatch.setattr(sgm_left, "_last_position", lambda m, value, valid, name:
+                        sgm_left.register(m, value, len(value), name))
+    assert_stage_caught(monkeypatch, params)
+
+
+def test_broken_left_pairs_odd_choice_is_caught(monkeypatch):
+    """R = 1: an odd column's choice also obeying the even column's fifth comparison
+    (Q(x + 1) - C(x) against its four candidates)."""
+    params = sgm_params("census", 3, 4, 1, 3, 20, 2, width=40, height=3)
+    real = sgm_left._minimum
+    monkeypatch.setattr(sgm_left, "_minimum", lambda candidates, bits, small=None:
+                        real(candidates + [candidates[-1]] * (len(candidates) == 4), bits,
+                             small))
+    assert_stage_caught(monkeypatch, params)
 
 
 def test_broken_left_history_is_caught(monkeypatch):
     """b(x) from the history one position too new (argmin of x - K + 1): rows longer than
     K catch it."""
-    params = sgm_params("census", 3, 4, 1, 3, 20, 2, width=22, height=3)
+    params = sgm_params("census", 3, 4, 1, 3, 20, 2, width=40, height=3)
     real = sgm_left._picks
 
     def shifted(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
@@ -354,12 +383,14 @@ def test_any_rounds_dividing_d_are_built(disparities, rounds):
     params = sgm_params("census", 5, disparities, rounds, width=disparities + 16, height=4)
     plan.check_buildable(params)
     timing = plan_timing.sgm_timing(params)
-    assert timing.left_stages == (1 if rounds < 3 else 2 if rounds == 3 else 3)
+    # R = 1: the loop over two positions, Lu three clocks after its read.
+    assert timing.left_stages == (3 if rounds == 1 else 1 if rounds == 2 else
+                                  2 if rounds == 3 else 3)
     # (argmin tree split, history clocks, sum clocks, start early): each as long as the
-    # margins allow; R = 1 at D >= 64 keeps the one-clock argmin levels, D = 256 the
-    # one-clock history and sum, one lane (D = R) two clocks for the sum.
-    expected = {(4, 1): (True, 2, 3, False), (64, 1): (False, 2, 2, False),
-                (256, 1): (False, 1, 1, False), (100, 5): (True, 2, 3, True),
+    # margins allow; J = 8 leaves them all at R = 1 but the early start (m(0) is stored at
+    # the clock that loads the reference), one lane (D = R) two clocks for the sum.
+    expected = {(4, 1): (True, 2, 3, False), (64, 1): (True, 2, 3, False),
+                (256, 1): (True, 2, 3, False), (100, 5): (True, 2, 3, True),
                 (7, 7): (True, 2, 2, True), (256, 2): (True, 2, 3, True),
                 (9, 3): (True, 2, 3, True)}
     assert (timing.left_argmin_split, timing.left_history, timing.left_sum_clocks,
@@ -397,16 +428,16 @@ def test_rounds_not_dividing_d_are_refused():
 
 def test_sgm_memories_within_the_budget():
     """At 450 x 375, D = 100, R = 10 with the defaults: 3 x 450 x 100 x 7 bits of path
-    costs, 3 x 450 x 7 of minima, the left path's store of 10 words of 10 x 11 bits (Lu)
-    and 10 x 11 (Lu + P1) and its first lanes, the top-left store, and all of SGM's memory beside the box
+    costs, 3 x 450 x 7 of minima, the left path's store of 10 words of 10 x 12 bits (Lu)
+    and 10 x 12 (Lu + P1) and its first lanes, the top-left store, and all of SGM's memory beside the box
     configuration's under 1 Mibit."""
     params = sgm_params("census", 7, 100, 10, width=450, height=375)
     kinds = {}
     for memory in plan_memories.sgm_memories(params):    # the stores: a memory per few lanes
         kinds[memory.name] = kinds.get(memory.name, 0) + memory.bits
     assert kinds == {"path rows (top, top-left)": 630_000, "path rows (top-right)": 315_000,
-                     "path minima": 9_450, "left path store": 2_200,
-                     "left path first lanes": 110, "top-left store": 700}
+                     "path minima": 9_450, "left path store": 2_400,
+                     "left path first lanes": 120, "top-left store": 700}
     box = params.replace(aggregation=3, p1=None, p2=None, p2_adapt=None)
     assert plan_memories.memory_bits(params) - plan_memories.memory_bits(box) < 1 << 20
     # Counterpart: one more step of P2 makes the path cost 8 bits, and the rows of path

@@ -158,16 +158,17 @@ def test_sgm_boundary_values_are_accepted(changes):
 
 
 @pytest.mark.parametrize("fields, summed, path", [
-    # S: the left path's 16 Cmax + P2 plus 3 (Cmax + P2) from the row above.
-    # Default census 7x7: Cmax 48, 847 + 3 x 127 = 1228 < 2048, 48 + 79 = 127 < 128.
+    # S: the left path's 32 Cmax + P2 plus 3 (Cmax + P2) from the row above.
+    # Default census 7x7: Cmax 48, 1615 + 3 x 127 = 1996 < 2048, 48 + 79 = 127 < 128.
     ({"block": 7}, 11, 7),
-    # Census 5x5, P2 96: 480 + 3 x 120 = 840, 120.
-    ({"block": 5, "p1": 16, "p2": 96, "p2_adapt": 4}, 10, 7),
+    # Census 5x5, P2 96: 864 + 3 x 120 = 1224, 120.
+    ({"block": 5, "p1": 16, "p2": 96, "p2_adapt": 4}, 11, 7),
     # One step further: census 7x7 with P2 = 80 needs an 8-bit path cost.
     ({"block": 7, "p2": 80}, 11, 8),
-    # Census 9x9 at P2max = 431: 80 + 431 = 511 (9 bits), 1711 + 1533 = 3244 (12 bits).
-    ({"block": 9, "p2": 431}, 12, 9),
-    ({"transform": "ext-census", "block": 3, "p1": 100, "p2": 900}, 16, 12),
+    # Census 9x9 at P2max = 431: 80 + 431 = 511 (9 bits), 2991 + 1533 = 4524 (13 bits).
+    ({"block": 9, "p2": 431}, 13, 9),
+    # Ext. census 3x3, Cmax 2040: 66,180 + 3 x 2940 = 75,000 (17 bits).
+    ({"transform": "ext-census", "block": 3, "p1": 100, "p2": 900}, 17, 12),
 ])
 def test_sgm_widths_and_geometry(fields, summed, path):
     params = StereoParams(**{"transform": "census", "aggregation": "sgm", "disparities": 16,

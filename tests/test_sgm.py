@@ -31,8 +31,9 @@ import reference
 #: Predecessor offsets, written out again (not imported) so a wrong table in the golden
 #: model cannot agree with itself.
 REF_STEPS = {"left": (-1, 0), "top-left": (-1, -1), "top": (0, -1), "top-right": (1, -1)}
-#: The left path's tracking constants J and K, written out again for the same reason.
-REF_J, REF_K = 4, 16
+#: The left path's tracking constants J and K, and the parity of the columns its small step
+#: goes into, written out again for the same reason.
+REF_J, REF_K, REF_P1_PARITY = 8, 32, 1
 
 
 def ref_bit_length(value):
@@ -112,9 +113,9 @@ def ref_left_row(costs, p1, penalties, reference=ref_tracked):
         column = []
         for d in range(disparities):
             candidates = [previous[d], ref + penalties[x]]
-            if d > 0:
+            if d > 0 and x % 2 == REF_P1_PARITY:
                 candidates.append(previous[d - 1] + p1)
-            if d < disparities - 1:
+            if d < disparities - 1 and x % 2 == REF_P1_PARITY:
                 candidates.append(previous[d + 1] + p1)
             column.append(costs[x][d] + min(candidates))
         lu.append(column)
@@ -345,10 +346,10 @@ def test_frame_of_one_row_and_one_column():
 
 LEFT_CASES = [
     # height, width, D, Cmax, P1, P2, costs drawn from
-    (3, 40, 5, 24, 3, 20, "random"),
-    (4, 37, 6, 3, 1, 2, "levels"),       # costs 0 .. 3: ties everywhere, argmin ties too
-    (2, 45, 1, 24, 0, 0, "random"),      # one disparity
-    (3, 33, 8, 48, 24, 79, "extreme"),   # costs 0 and Cmax only
+    (3, 72, 5, 24, 3, 20, "random"),
+    (4, 69, 6, 3, 1, 2, "levels"),       # costs 0 .. 3: ties everywhere, argmin ties too
+    (2, 77, 1, 24, 0, 0, "random"),      # one disparity
+    (3, 65, 8, 48, 24, 79, "extreme"),   # costs 0 and Cmax only
 ]
 
 
@@ -378,13 +379,14 @@ def exact_reference(path, costs, best, x, index):
 @pytest.mark.parametrize("height, width, D, cmax, p1, p2, kind", LEFT_CASES)
 def test_left_path_with_the_exact_minimum_is_exact_sgm(monkeypatch, height, width, D, cmax,
                                                        p1, p2, kind):
-    """With ref(x) = min_d Lu(x-1, d) the left path is exact SGM: the normalised recurrence
-    of the paths from above (the top path of the transposed volume)."""
+    """With ref(x) = min_d Lu(x-1, d) the left path is SGM's recurrence with the small step
+    into the columns of one parity only: the unnormalised recurrence with the exact minimum,
+    normalised afterwards (the normalisation commutes with the minimum)."""
     costs = left_volume(np.random.default_rng(D), height, width, D, cmax, kind)
-    exact = as_array(ref_path(costs.transpose(1, 0, 2).tolist(), "top", p1, p2))
+    exact = as_array([ref_left_row(row, p1, [p2] * width, lambda lu, c, x: min(lu[x - 1]))
+                      for row in costs.tolist()])
     monkeypatch.setattr(sgm, "_tracked_reference", exact_reference)
-    got = golden_path(costs, "left", p1, p2, max_cost=cmax)
-    assert np.array_equal(got, exact.transpose(1, 0, 2))
+    assert np.array_equal(golden_path(costs, "left", p1, p2, max_cost=cmax), exact)
 
 
 def left_width_violations(seed):
@@ -417,16 +419,16 @@ def test_broken_stale_minimum_breaks_the_widths(monkeypatch):
 
 
 def test_widths_formulae():
-    # Census 5x5, P2 = 64: L of the left path <= 16 x 24 + 64 = 448 (9 bits), S <= 448 +
-    # 3 x 88 = 712 (10 bits); modulo 2^n with 2^(n-1) > 448 + P1.
+    # Census 5x5, P2 = 64: L of the left path <= 32 x 24 + 64 = 832 (10 bits), S <= 832 +
+    # 3 x 88 = 1096 (11 bits); modulo 2^n with 2^(n-1) > 832 + 24 + P1.
     assert (sgm_path_cost_bits(24, 64), sgm_left_cost_bits(24, 64),
-            sgm_summed_cost_bits(24, 64)) == (7, 9, 10)
-    assert sgm_left_loop_bits(24, 63, 64) == 10 and sgm_left_loop_bits(24, 64, 64) == 11
+            sgm_summed_cost_bits(24, 64)) == (7, 10, 11)
+    assert sgm_left_loop_bits(24, 167, 64) == 11 and sgm_left_loop_bits(24, 168, 64) == 12
     assert max_path_penalty(24) == 103 and sgm_path_cost_bits(24, 103) == 7
     assert sgm_path_cost_bits(80, 47) == 7 and sgm_path_cost_bits(80, 48) == 8
-    defaults = StereoParams(**SGM_RECOMMENDED[0])  # census 7x7, P2 = 79: 847, 1228, 871
+    defaults = StereoParams(**SGM_RECOMMENDED[0])  # census 7x7, P2 = 79: 1615, 1996, 1687
     assert (defaults.cost_bits, defaults.path_cost_bits, defaults.left_cost_bits,
-            defaults.aggregated_cost_bits, defaults.left_loop_bits) == (6, 7, 10, 11, 11)
+            defaults.aggregated_cost_bits, defaults.left_loop_bits) == (6, 7, 11, 11, 12)
 
 
 @pytest.mark.parametrize("cmax", [1, 24, 48, 6120, 91800])
