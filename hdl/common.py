@@ -19,7 +19,8 @@ from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import data
 from amaranth.lib.memory import Memory
 
-__all__ = ["bits_for", "tag_layout", "y_range", "pipe", "delay", "round_base", "SlotClock",
+__all__ = ["bits_for", "tag_layout", "y_range", "delay_line", "delay_line_rings",
+           "DELAY_LINE_MIN", "DELAY_LINE_BITS", "pipe", "delay", "round_base", "SlotClock",
            "Store", "LaneStores", "ShiftStore", "column_inside", "better", "absolute_difference",
            "split_lanes"]
 
@@ -126,6 +127,60 @@ def taps(m, value, depth, name):
     for k in range(depth):
         copies.append(register(m, copies[-1], value.shape(), f"{name}_d{k + 1}"))
     return copies
+
+
+#: Free-running delays of at least this many clocks go into rings of LUT RAM
+#: (:func:`delay_line`): a word of LUT RAM per four bits holds 16 clocks of them, where
+#: flip-flops hold one. At R = 1 the SGM stage's delays held 15,700 of census 5x5 SGM's
+#: 73,000 flip-flops at 640 x 480, D = 64 (87 % of the ECP5-85k's; it did not place).
+DELAY_LINE_MIN = 4
+#: Bits per ring of a delay line, each ring with pointers of its own (one pointer into every
+#: LUT RAM of a wide delay would be a long wire, as for :class:`LaneStores`).
+DELAY_LINE_BITS = 32
+
+
+def delay_line_rings(width, steps):
+    """The rings of LUT RAM of a :func:`delay_line` of ``width`` bits by ``steps`` clocks,
+    as (bits, depth) each: none below :data:`DELAY_LINE_MIN` (registers then)."""
+    if steps < DELAY_LINE_MIN:
+        return []
+    depth = 1 << (steps - 1).bit_length()
+    return [(min(DELAY_LINE_BITS, width - start), depth)
+            for start in range(0, width, DELAY_LINE_BITS)]
+
+
+def delay_line(m, value, steps, name):
+    """``value`` ``steps`` clocks late, free-running (``taps(m, value, steps, name)[-1]``).
+
+    From :data:`DELAY_LINE_MIN` clocks on, a ring of LUT RAM per :data:`DELAY_LINE_BITS`
+    bits: written every clock at a pointer, read combinationally at a pointer ``steps`` - 1
+    behind it, into a register. Both pointers count freely from their initial values, so
+    their distance holds from configuration on, and no reset is needed.
+    """
+    rings = delay_line_rings(len(value), steps)
+    if not rings:
+        return taps(m, value, steps, name)[-1]
+    parts, start = [], 0
+    for k, (bits, depth) in enumerate(rings):
+        m.submodules[f"{name}_ring{k}"] = ring = Memory(shape=unsigned(bits), depth=depth,
+                                                        init=[])
+        write, read = ring.write_port(), ring.read_port(domain="comb")
+        pointers = depth.bit_length() - 1
+        written = Signal(pointers, name=f"{name}_ring{k}_write", reset_less=True)
+        reading = Signal(pointers, name=f"{name}_ring{k}_read",
+                         init=-_ring_distance(steps) % depth, reset_less=True)
+        m.d.sync += [written.eq(written + 1), reading.eq(reading + 1)]
+        m.d.comb += [write.addr.eq(written), write.data.eq(value[start:start + bits]),
+                     write.en.eq(1), read.addr.eq(reading)]
+        parts.append(register(m, read.data, bits, f"{name}_ring{k}_out"))
+        start += bits
+    return Cat(*parts)
+
+
+def _ring_distance(steps):
+    """How far a ring's read pointer trails its write pointer: the word written ``steps``
+    - 1 clocks ago, read into the register that makes the ``steps``-th clock."""
+    return steps - 1
 
 
 def pipe(m, value, steps, name, reset=False):

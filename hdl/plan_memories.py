@@ -12,11 +12,12 @@ from dataclasses import dataclass
 
 from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
 from .banks import ADDRESS_SLICE_BITS, slice_widths
-from .common import lane_groups, tag_layout
+from .common import delay_line_rings, lane_groups, tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, row_banks, store_slices,
                              vertical_bits, window_rows)
-from .plan_timing import core_timing, lr_timing, sgm_left_pairs, sgm_left_shift_store
+from .plan_timing import core_timing, lr_timing, sgm_delays, sgm_left_pairs, \
+    sgm_left_shift_store
 from .trees import DEFAULT_EVERY
 
 __all__ = ["MemoryUse", "memories", "memory_bits", "sgm_memories", "built_memories",
@@ -71,7 +72,7 @@ def memories(params, every=DEFAULT_EVERY):
             result.append(MemoryUse("cost lines", units * banks.count(depth), depth,
                                     (p.aggregation - 1) * p.cost_bits))
     if p.is_sgm:
-        result += sgm_memories(p)
+        result += sgm_memories(p, every)
     if rounds > 1:
         widths = store_slices(rows * p.transform_bits + term_word_bits(p))
         for width in sorted(set(widths)):
@@ -133,7 +134,7 @@ def built_memories(params, every=DEFAULT_EVERY):
             for (name, depth, width, read, ordered), count in found.items()]
 
 
-def sgm_memories(params):
+def sgm_memories(params, every=DEFAULT_EVERY):
     """The SGM stage's memories (docs/hardware.md, "Memories").
 
     Block RAM: the previous row's path costs, one word per (column, round) of D/R values,
@@ -166,6 +167,16 @@ def sgm_memories(params):
     if p.rounds > 1:
         result += [MemoryUse("top-left store", count, p.rounds, lanes * p.path_cost_bits,
                              ASYNC) for lanes, count in sorted(sizes.items())]
+    # The long free-running delays, rings of LUT RAM (common.delay_line): the three paths'
+    # sum (three L from above: 2 bits wider) and the left path's L to their addition, the
+    # left path's Lu (the fifth path's again) to its normalisation.
+    delays = sgm_delays(p, every)
+    lines = [("above", p.path_cost_bits + 2, 1), ("left", p.left_cost_bits, 1),
+             ("lu", p.left_loop_bits, 2 if p.fifth_path else 1)]
+    for key, bits, copies in lines:
+        rings = Counter(delay_line_rings(p.per_round * bits, delays[key]))
+        result += [MemoryUse(f"delay line ({key})", copies * count, depth, width, ASYNC)
+                   for (width, depth), count in sorted(rings.items())]
     if p.fifth_path:
         # hdl/sgm_right.py: a row of the costs (and the left path's P2 when adaptive), of
         # S4 and of S5, one word per (column, round).

@@ -366,6 +366,16 @@ def sgm_timing(params, every=DEFAULT_EVERY):
                      rows + tree + rounds, summed)
 
 
+def sgm_delays(params, every=DEFAULT_EVERY):
+    """The SGM stage's free-running delays in clocks (:func:`.common.delay_line`): the sum
+    of the three paths from above (``above``) and the left path's L (``left``) to where
+    they are added, and the left path's Lu to its normalisation by m(x - 1) (``lu``)."""
+    t = sgm_timing(params, every)
+    above = t.rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
+    aligned = max(t.left, above)
+    return {"above": aligned - above, "left": aligned - t.left, "lu": t.left - 1 - t.left_lu}
+
+
 @dataclass(frozen=True)
 class FifthTiming:
     """Offsets of the fifth path (:mod:`.sgm_right`) after the SGM stage's input; each

@@ -41,10 +41,10 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, SGM_PATH_STEPS, SGM_PATHS, SGM_ROW_PATHS
 from .banks import banked_memory, line_memory
-from .common import LaneStores, SlotClock, absolute_difference, bits_for, register, \
-    replica, split_lanes, tag_layout, taps
+from .common import LaneStores, SlotClock, absolute_difference, bits_for, delay_line, \
+    register, replica, split_lanes, tag_layout, taps
 from .plan_structure import row_banks
-from .plan_timing import SGM_ABOVE_EVERY, SGM_ROW_CLOCKS, sgm_fifth_timing, \
+from .plan_timing import SGM_ABOVE_EVERY, SGM_ROW_CLOCKS, sgm_delays, sgm_fifth_timing, \
     sgm_timing
 from .sgm_left import PathOwner, left_path
 from .sgm_right import fifth_path
@@ -183,18 +183,17 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         left = left_path(self, m, fresh["left"], p2["left"])
         rows = self._row_paths(m, fresh, p2)
         # The three L from above are summed as soon as they are there, and their sum waits
-        # for the left path's L (at R = 1 eight clocks): one sum of 9 bits a lane in the
+        # for the left path's L (at R = 1 fourteen clocks): one sum of 9 bits a lane in the
         # delay line instead of three L of 7 (5,600 of the 55,700 flip-flops of census 5x5
-        # at D = 64, R = 1).
+        # at D = 64, R = 1, before the delay lines were LUT RAM).
         plan = register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True)
         above = [build_sum(m, 1, [rows[path][i] for path in SGM_ROW_PATHS], plan)
                  for i in range(units)]
-        above_at = t.rows + sum(plan)
-        aligned = max(t.left, above_at)
+        delays = sgm_delays(p, self.every)
         above_bits = len(above[0])
-        above = split_lanes(taps(m, Cat(*above), aligned - above_at, "sgm_above_aligned")[-1],
+        above = split_lanes(delay_line(m, Cat(*above), delays["above"], "sgm_above_aligned"),
                             units, above_bits)
-        left = split_lanes(taps(m, Cat(*left), aligned - t.left, "sgm_left_aligned")[-1],
+        left = split_lanes(delay_line(m, Cat(*left), delays["left"], "sgm_left_aligned"),
                            units, p.left_cost_bits)
         plan = register_plan(2, self.every, 0, True)
         totals = [build_sum(m, 1, [left[i], above[i]], plan) for i in range(units)]

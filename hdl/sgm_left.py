@@ -43,9 +43,9 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_LEFT_P1_PARITY, SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import (LaneStores, ShiftStore, Store, bits_for, register, replica,
-                     split_lanes, taps)
-from .plan_timing import sgm_left_firsts_registered, sgm_left_shift_store
+from .common import (LaneStores, ShiftStore, Store, bits_for, delay_line, register, replica,
+                     split_lanes)
+from .plan_timing import sgm_delays, sgm_left_firsts_registered, sgm_left_shift_store
 from .trees import build_min_tree
 
 __all__ = ["PathOwner", "left_path"]
@@ -260,7 +260,8 @@ def left_path(owner, m, fresh, p2):
     out = t.left - 1
     fresh_out = _copies(m, fresh_at(out - 1), 1, units, "sgm_left_fresh_out",
                         per=_OUTPUT_LANES_PER_COPY)
-    delayed = [taps(m, v, out - lu_at, f"sgm_left_lu{i}")[-1] for i, v in enumerate(lu)]
+    assert out - lu_at == sgm_delays(p)["lu"]
+    delayed = split_lanes(delay_line(m, Cat(*lu), out - lu_at, "sgm_left_lu_delay"), units, bits)
     return [register(m, (v - Mux(f, 0, mc))[:p.left_cost_bits], p.left_cost_bits,
                      f"sgm_left_l{i}")
             for i, (v, f, mc) in enumerate(zip(delayed, fresh_out, previous_m))]
@@ -532,7 +533,10 @@ def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
         # was next (9.9 ns, five LUT levels, at R = 10).
         ahead = t.left_history
         x = column(at - ahead)
-        near = register(m, x <= age - k, 1, f"sgm_left_young{k}")
+        # (Always young where the column cannot pass K - k: a comparison with a constant
+        # beyond the column's range is a lint warning.)
+        young = Const(1) if age - k >= (1 << len(x)) - 1 else x <= age - k
+        near = register(m, young, 1, f"sgm_left_young{k}")
         entry = register(m, (x + k)[:age.bit_length() - 1], age.bit_length() - 1,
                           f"sgm_left_history_at{k}")
         if ahead == 2:

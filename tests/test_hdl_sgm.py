@@ -429,7 +429,8 @@ def test_rounds_not_dividing_d_are_refused():
 def test_sgm_memories_within_the_budget():
     """At 450 x 375, D = 100, R = 10 with the defaults: 3 x 450 x 100 x 7 bits of path
     costs, 3 x 450 x 7 of minima, the left path's store of 10 words of 10 x 12 bits (Lu)
-    and 10 x 12 (Lu + P1) and its first lanes, the top-left store, and all of SGM's memory beside the box
+    and 10 x 12 (Lu + P1) and its first lanes, the delay lines of LUT RAM (the three paths'
+    sum, 10 x 9 bits, 8 clocks; Lu, 10 x 12 bits, 16 clocks), the top-left store, and all of SGM's memory beside the box
     configuration's under 1 Mibit."""
     params = sgm_params("census", 7, 100, 10, width=450, height=375)
     kinds = {}
@@ -437,7 +438,8 @@ def test_sgm_memories_within_the_budget():
         kinds[memory.name] = kinds.get(memory.name, 0) + memory.bits
     assert kinds == {"path rows (top, top-left)": 630_000, "path rows (top-right)": 315_000,
                      "path minima": 9_450, "left path store": 2_400,
-                     "left path first lanes": 120, "top-left store": 700}
+                     "left path first lanes": 120, "delay line (above)": 720,
+                     "delay line (lu)": 1_920, "top-left store": 700}
     box = params.replace(aggregation=3, p1=None, p2=None, p2_adapt=None)
     assert plan_memories.memory_bits(params) - plan_memories.memory_bits(box) < 1 << 20
     # Counterpart: one more step of P2 makes the path cost 8 bits, and the rows of path

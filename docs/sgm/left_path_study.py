@@ -14,7 +14,8 @@ with Lu = C for the first s columns, and differs only in the step s and in ref(x
 reference the large step is taken from (exact SGM: s = 1, ref(x) = min_d Lu(x - 1, d)):
 
 - ``exact``: ref(x) = min_d Lu(x - s, d) (s = 1 was golden/sgm.py bit for bit before the
-  tracked reference became the semantics; ``track 4 16`` is now, checked);
+  tracked reference became the semantics; ``track 4 16`` was until the ninth session,
+  ``track 8 32, P1 into odd columns`` is now, checked);
 - ``stale K``: ref(x) = min_d Lu(x - K s, d), the minimum of an older position;
 - ``comp K``: the stale minimum plus the smallest costs Cmin of the positions in between, a
   lower bound of the exact minimum;
@@ -44,7 +45,8 @@ from npstereo.golden.data import load_middlebury, read_image
 from npstereo.golden.degrade import gaussian_noise_pair
 from npstereo.golden.quality import evaluate
 from npstereo.golden.synthetic import synthetic_pair
-from npstereo.params import SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS, StereoParams
+from npstereo.params import (SGM_LEFT_P1_PARITY, SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS,
+                             StereoParams)
 
 #: (name, step s, kind, J, K[, parity]) of every variant measured; with a parity, the steps
 #: into the columns x with x % 2 == parity take no P1 transition (stay or the large step):
@@ -117,7 +119,9 @@ def score(left, right, truth, disparities, config, variant):
     left_costs, spread = left_path(volume, p1, sgm.path_p2(left, "left", p1, p2, adapt),
                                    step, kind, j, k, parity)
     summed = rows + left_costs
-    if (step, kind, j, k, parity) == (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, None):
+    # The golden model's left path: no P1 into the columns of the other parity.
+    golden_left = (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, 1 - SGM_LEFT_P1_PARITY)
+    if (step, kind, j, k, parity) == golden_left:
         golden = sgm.aggregate(volume, p1, p2, guide=left, adapt=adapt,
                                max_cost=params.max_cost)
         assert np.array_equal(summed, golden), f"{variant[0]} must be golden/sgm.py"
