@@ -407,15 +407,15 @@ MEASURED_BY_YOSYS = [
                   line_buffer="transforms"), 21),
     (StereoParams(**C5, disparities=16, rounds=1, aggregation="sgm", width=640, height=48), 29),
     (StereoParams(**C5, disparities=16, rounds=4, aggregation="sgm", fifth_path=True,
-                  width=640, height=48), 51),
+                  width=640, height=48), 52),
     (StereoParams(**C5, disparities=16, rounds=1, aggregation="sgm", fifth_path=True,
-                  median=True, cost_term="ad3", width=640, height=48), 55),
+                  median=True, cost_term="ad3", width=640, height=48), 57),
     (StereoParams(**C5, disparities=16, rounds=2, aggregation="sgm", cost_term="ad3",
                   subpixel_bits=4, width=1280, height=48), 41),
     (StereoParams(**C5, disparities=64, rounds=4, aggregation="sgm", width=1280,
                   height=720), 109),
     (StereoParams(transform="census", block=7, disparities=64, rounds=4, aggregation="sgm",
-                  fifth_path=True, cost_term="ad3", median=True, width=640, height=480), 181),
+                  fifth_path=True, cost_term="ad3", median=True, width=640, height=480), 185),
 ]
 
 
