@@ -40,12 +40,13 @@ are written only in slots with a position.
 m(x - 1), the exact minimum over D of the previous position, is there.
 """
 
-from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_LEFT_P1_PARITY, SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import (LaneStores, ShiftStore, Store, bits_for, delay_line, register, replica,
                      split_lanes)
 from .plan_timing import sgm_delays, sgm_left_firsts_registered, sgm_left_shift_store
+from .sgm_left_reference import pick_references as _picks, reference_sum
 from .trees import build_min_tree
 
 __all__ = ["PathOwner", "left_path"]
@@ -121,38 +122,6 @@ def _file(m, count, shape, name):
     return [Signal(shape, name=f"{name}{k}", reset_less=True) for k in range(count)]
 
 
-def _pick_groups(count, lane_bits):
-    """The groups of :func:`_pick` over ``count`` values by a ``lane_bits``-bit lane."""
-    return -(-count // (1 << (lane_bits + 1) // 2))
-
-
-def _pick(m, values, lane, name, copies=None):
-    """values[lane] in two clocks: the lane's low bits select within groups (registered),
-    the high bits the group (returned combinationally, a clock after ``values``).
-    ``copies``: the lane once per group (:func:`_pick_groups`), each group's select its
-    own register."""
-    width = len(values[0])
-    if len(values) == 1:
-        return register(m, values[0], width, f"{name}_g0")
-    low = (len(lane) + 1) // 2
-    size = 1 << low
-    copies = copies or [lane] * _pick_groups(len(values), len(lane))
-    groups = [register(m, Array(_padded(values[k:k + size], size))[copy[:low]], width,
-                        f"{name}_g{k}")
-              for copy, k in zip(copies, range(0, len(values), size))]
-    high = register(m, lane[low:], max(1, len(lane) - low), f"{name}_high")
-    if len(groups) == 1:
-        return groups[0]
-    return Array(_padded(groups, 1 << len(high)))[high]
-
-
-def _padded(values, count):
-    """``values`` repeated at their last up to ``count``: an index of log2(count) bits then
-    covers every case (a partial case is a lint warning, and its default a latch-like
-    hold in simulation), and the lanes past the last are never selected."""
-    return list(values) + [values[-1]] * (count - len(values))
-
-
 def _argmin(m, values, less, name, split=False):
     """(value, lane) of the smallest of ``values``, ties to the lowest lane: a tree with a
     register after every level, two with ``split`` (:func:`~.trees.build_min_tree`)."""
@@ -205,7 +174,7 @@ def left_path(owner, m, fresh, p2):
     assert steps & (steps - 1) == 0 and age & (age - 1) == 0, \
         "the files are indexed by the column's low bits"
     costs = owner._costs
-    loop, lu_at, argmin_at = t.loop, t.left_lu, t.left_argmin
+    lu_at, argmin_at = t.left_lu, t.left_argmin
     lane_bits, round_bits = bits_for(units - 1), bits_for(rounds - 1)
 
     def less(a, b):
@@ -239,7 +208,7 @@ def left_path(owner, m, fresh, p2):
     sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
 
     # ref(x) + P2(x), loaded at ``left_reference`` and held through the slot.
-    reference = _copies(m, _reference(owner, m, column, m0, p2, chosen, sums), bits, units,
+    reference = _copies(m, reference_sum(owner, m, column, m0, p2, chosen, sums), bits, units,
                         "sgm_left_ref", slots.first(t.left_reference))
     update = _pair_update if t.left_pairs else _lane_update
     lu = update(owner, m, reference, fresh_at, column)
@@ -399,7 +368,7 @@ def _pair_update(owner, m, reference, fresh_at, column):
     (Lu(x' - 1) is written then) and chooses and adds C(x') in the next, outside the loop.
     Every register below is written only in slots with a position (gaps hold them).
     """
-    p, t, slots = owner.params, owner.timing, owner._slots
+    p, t = owner.params, owner.timing
     units, bits, costs, loop = p.per_round, p.left_loop_bits, owner._costs, t.loop
     assert t.left_reference == loop - 2 and t.left_lu == loop + 3
 
@@ -482,100 +451,3 @@ def _last_position(m, value, valid, name):
     """``value`` of the last slot with a position (``valid`` set), a clock later: what the
     loop over two positions keeps of x - 1 across the gaps before x."""
     return register(m, value, len(value), name, valid)
-
-
-def _reference(owner, m, column, m0, p2, chosen, sums):
-    """ref(x) + P2(x) in the clock ``loop`` - 1: the C(x - k, b(x)) that exist (x - k >= 1)
-    read from their files ``timing.left_sum_clocks`` before, registered where that is two
-    or three, and added to P2 (the first level of additions registered where three), then
-    Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into a register where
-    ``timing.left_start_early``)."""
-    t, steps = owner.timing, SGM_TRACK_STEPS
-    bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
-    at = t.left_reference - t.left_sum_clocks
-    # Which entries exist and where they are, from the column a clock ahead (a slot-aligned
-    # value holds for the slot's R clocks, so the registers hold this position's): the
-    # subtractions and comparisons in front of the files' multiplexers and the additions
-    # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers
-    # and the additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz).
-    x = column(at - 1)
-    terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
-                 Array(entries)[register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
-             for k, entries in enumerate(sums, 1)]
-    if t.left_sum_clocks >= 2:
-        terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
-                 for k, term in enumerate(terms, 1)]
-    def level(terms):       # a tree of additions, not a chain
-        return [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
-    # With three clocks the first level of additions is registered (P2 joins it).
-    first_level = t.left_sum_clocks == 3
-    terms.append(owner._aligned(p2, t.guide, t.left_reference - 1 - first_level,
-                                 "sgm_left_p2"))
-    if first_level:
-        terms = [register(m, v, len(v), f"sgm_left_pair{k}") for k, v in enumerate(level(terms))]
-    while len(terms) > 1:
-        terms = level(terms)
-    total = register(m, terms[0][:bits], bits, "sgm_left_csum")
-    early = t.left_start_early
-    x = column(t.left_reference - 1 - early)
-    near = register(m, x <= steps, 1, "sgm_left_near")
-    start = Mux(near, m0, Array(chosen)[register(m, x[:index], index, "sgm_left_chosen_at")])
-    if early:
-        start = register(m, start, bits, "sgm_left_start")
-    return (start + total)[:bits]
-
-
-def _picks(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
-    """At position p, for k = 1 .. J: b(p + k) from the history (G(0) for p + k <= K), and
-    C(p, b(p + k)) into ``sums[k - 1]`` (k < J) or Lu(p, b(p + J)) into ``chosen``, each
-    at entry p mod J, in the round that holds b."""
-    p, t, slots = owner.params, owner.timing, owner._slots
-    steps, age = SGM_TRACK_STEPS, SGM_TRACK_AGE
-    lane_bits = bits_for(p.per_round - 1)
-    index = steps.bit_length() - 1
-    for k, at in enumerate(t.left_picks, 1):
-        # The comparison and the history's address from the column ahead, and the
-        # history's multiplexer in two clocks where the margins allow (the entry's low bits
-        # within groups, registered, then the group): in front of the multiplexer they were
-        # census 7x7 SGM's critical path (13.5 ns, ECP5), and the multiplexer in one clock
-        # was next (9.9 ns, five LUT levels, at R = 10).
-        ahead = t.left_history
-        x = column(at - ahead)
-        # (Always young where the column cannot pass K - k: a comparison with a constant
-        # beyond the column's range is a lint warning.)
-        young = Const(1) if age - k >= (1 << len(x)) - 1 else x <= age - k
-        near = register(m, young, 1, f"sgm_left_young{k}")
-        # The entry once per group of the history's multiplexer: one register into the
-        # selects of all K = 32 entries was census 7x7 SGM's critical path at R = 10
-        # (11.38 ns, 3 levels, 87.9 MHz).
-        entry_bits = age.bit_length() - 1
-        entries = [replica(m, (x + k)[:entry_bits], f"sgm_left_history_at{k}_{g}",
-                           unsigned(entry_bits), reset_less=True)
-                   for g in range(_pick_groups(age, entry_bits))]
-        if ahead == 2:
-            near = register(m, near, 1, f"sgm_left_young{k}_at")
-            tracked = _pick(m, history, entries[0], f"sgm_left_history{k}", entries)
-        else:
-            tracked = Array(history)[entries[0]]
-        b = register(m, Mux(near, b0, tracked), len(b0), f"sgm_left_b{k}", slots.first(at))
-        lane, round_ = b[:lane_bits], b[lane_bits:]
-        if k < steps:
-            values, files, picked_at = owner._costs[at + 1], sums[k - 1], at + 2
-        else:
-            values, files, picked_at = lu, chosen, t.left_lu + 1
-        picked = _pick(m, values, lane, f"sgm_left_pick{k}")
-        # b holds for R clocks only: its round is compared beside the first pick level.
-        match = register(m, slots.round(picked_at - 1) == round_, 1, f"sgm_left_match{k}")
-        # Which entry is written, decoded a clock ahead into a flag per entry: the shared
-        # valid flag through the decoder into a file's enables was census 7x7 SGM's path
-        # at R = 10 (7.21 ns, 6.21 of it routing).
-        ahead = picked_at - 1
-        write = owner._valid_at(ahead)
-        if k == steps:
-            write &= ~fresh_at(ahead)       # x <= J take m(0) instead
-        here = column(ahead)[:index]
-        for e, entry in enumerate(files):
-            flag = Signal(name=f"sgm_left_write{k}_{e}")
-            m.d.sync += flag.eq(write & (here == e))
-            with m.If(flag & match):
-                m.d.sync += entry.eq(picked)
