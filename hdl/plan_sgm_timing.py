@@ -129,6 +129,8 @@ class SgmTiming:
     left_sum_clocks: int  #: clocks from reading the picked costs C(x - k, b(x)) to their sum
     left_start_early: bool  #: ref's start, Lu(x - J, b(x)) or m(0), chosen a clock early
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
+    left_chain: int     #: the first k whose b(p + k) comes down the chain (the rest read)
+    left_chain_at: int  #: where position p shifts the chain (b(p + J) read from the history)
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
     minima: int         #: their minima m(x) are written (the last round's running minimum)
@@ -191,6 +193,16 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
+    # The chain: position p reads b(p + J) from the history once G(p + J - K) is there and
+    # shifts b(p + k + 1) of the position before into b(p + k), for every k whose pick is
+    # no earlier (then delayed to it). Everywhere but at R = 1, where G(p + J - K) comes
+    # too late for the first picks, the history then has one reader instead of J: J
+    # two-clock multiplexers over its K entries were census 7x7 SGM's critical path at
+    # R = 10 (11.30 ns, 8.9 of it routing, 88.5 MHz).
+    ready = argmin + history - (age - steps) * rounds
+    chain = next(k for k, at in enumerate(picks, 1) if at >= ready)
+    chain_at = picks[chain - 1]
+    assert list(picks) == sorted(picks), picks
     # Lu(x - J, b) in its file before position x reads it at ``reference``.
     assert lu + rounds + 1 <= steps * rounds + reference
     # ... and a clock earlier, with m(0) (stored at ``hand`` of the row's first position),
@@ -206,7 +218,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
-                     history, sum_clocks, start_early, picks, left, rows,
+                     history, sum_clocks, start_early, picks, chain, chain_at, left, rows,
                      rows + tree + rounds, summed)
 
 

@@ -89,36 +89,29 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
 def pick_references(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
     """At position p, for k = 1 .. J: b(p + k) from the history (G(0) for p + k <= K), and
     C(p, b(p + k)) into ``sums[k - 1]`` (k < J) or Lu(p, b(p + J)) into ``chosen``, each
-    at entry p mod J, in the round that holds b."""
+    at entry p mod J, in the round that holds b.
+
+    b(p + k) for k >= ``timing.left_chain`` comes down a chain: position p reads b(p + J)
+    and takes b(p + k) = b((p - 1) + (k + 1)) from the position before (shifted only in
+    slots with a position, so gaps do not matter), then delays it to its pick; the k
+    before the chain (at R = 1) read the history themselves."""
     p, t, slots = owner.params, owner.timing, owner._slots
-    steps, age = SGM_TRACK_STEPS, SGM_TRACK_AGE
+    steps = SGM_TRACK_STEPS
     lane_bits = bits_for(p.per_round - 1)
     index = steps.bit_length() - 1
+    tracked = {k: _history_read(owner, m, column, history, b0, k, at)
+               for k, at in enumerate(t.left_picks[:t.left_chain - 1], 1)}
+    shift_at = t.left_chain_at
+    shift = _chain_shift(owner, shift_at)
+    link = _history_read(owner, m, column, history, b0, steps, shift_at, shift)
+    for k in range(steps, t.left_chain - 1, -1):
+        if k < steps:
+            link = register(m, Mux(_young(m, column, k, shift_at, t.left_history), b0, link),
+                            len(b0), f"sgm_left_chain{k}", shift)
+        tracked[k] = slots.delay(link, shift_at + 1, t.left_picks[k - 1] - shift_at,
+                                 f"sgm_left_b{k}", reset_less=True)
     for k, at in enumerate(t.left_picks, 1):
-        # The comparison and the history's address from the column ahead, and the
-        # history's multiplexer in two clocks where the margins allow (the entry's low bits
-        # within groups, registered, then the group): in front of the multiplexer they were
-        # census 7x7 SGM's critical path (13.5 ns, ECP5), and the multiplexer in one clock
-        # was next (9.9 ns, five LUT levels, at R = 10).
-        ahead = t.left_history
-        x = column(at - ahead)
-        # (Always young where the column cannot pass K - k: a comparison with a constant
-        # beyond the column's range is a lint warning.)
-        young = Const(1) if age - k >= (1 << len(x)) - 1 else x <= age - k
-        near = register(m, young, 1, f"sgm_left_young{k}")
-        # The entry once per group of the history's multiplexer: one register into the
-        # selects of all K = 32 entries was census 7x7 SGM's critical path at R = 10
-        # (11.38 ns, 3 levels, 87.9 MHz).
-        entry_bits = age.bit_length() - 1
-        entries = [replica(m, (x + k)[:entry_bits], f"sgm_left_history_at{k}_{g}",
-                           unsigned(entry_bits), reset_less=True)
-                   for g in range(_pick_groups(age, entry_bits))]
-        if ahead == 2:
-            near = register(m, near, 1, f"sgm_left_young{k}_at")
-            tracked = _pick(m, history, entries[0], f"sgm_left_history{k}", entries)
-        else:
-            tracked = Array(history)[entries[0]]
-        b = register(m, Mux(near, b0, tracked), len(b0), f"sgm_left_b{k}", slots.first(at))
+        b = tracked[k]
         lane, round_ = b[:lane_bits], b[lane_bits:]
         if k < steps:
             values, files, picked_at = owner._costs[at + 1], sums[k - 1], at + 2
@@ -140,3 +133,45 @@ def pick_references(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
             m.d.sync += flag.eq(write & (here == e))
             with m.If(flag & match):
                 m.d.sync += entry.eq(picked)
+
+
+def _chain_shift(owner, at):
+    """The chain's shift: round 0 of a slot with a position at ``at``."""
+    return owner._slots.first(at) & owner._valid_at(at)
+
+
+def _young(m, column, k, at, ahead):
+    """Whether position p + k <= K (b(p + k) = G(0)), from the column ``ahead`` clocks
+    before ``at``, registered to it."""
+    x = column(at - ahead)
+    # (Always young where the column cannot pass K - k: a comparison with a constant
+    # beyond the column's range is a lint warning.)
+    young = Const(1) if SGM_TRACK_AGE - k >= (1 << len(x)) - 1 else x <= SGM_TRACK_AGE - k
+    near = register(m, young, 1, f"sgm_left_young{k}_{at}")
+    return register(m, near, 1, f"sgm_left_young{k}_{at}_at") if ahead == 2 else near
+
+
+def _history_read(owner, m, column, history, b0, k, at, enable=None):
+    """b(p + k) into a register loaded at ``at`` (in round 0, or while ``enable``): entry
+    (p + k) mod K of the history, or G(0) where p + k <= K."""
+    # The comparison and the history's address from the column ahead, and the history's
+    # multiplexer in two clocks where the margins allow (the entry's low bits within
+    # groups, registered, then the group): in front of the multiplexer they were census
+    # 7x7 SGM's critical path (13.5 ns, ECP5), and the multiplexer in one clock was next
+    # (9.9 ns, five LUT levels, at R = 10).
+    ahead, slots = owner.timing.left_history, owner._slots
+    x = column(at - ahead)
+    # The entry once per group of the history's multiplexer: one register into the
+    # selects of all K = 32 entries was census 7x7 SGM's critical path at R = 10
+    # (11.38 ns, 3 levels, 87.9 MHz).
+    entry_bits = SGM_TRACK_AGE.bit_length() - 1
+    entries = [replica(m, (x + k)[:entry_bits], f"sgm_left_history_at{k}_{g}",
+                       unsigned(entry_bits), reset_less=True)
+               for g in range(_pick_groups(SGM_TRACK_AGE, entry_bits))]
+    if ahead == 2:
+        tracked = _pick(m, history, entries[0], f"sgm_left_history{k}", entries)
+    else:
+        tracked = Array(history)[entries[0]]
+    near = _young(m, column, k, at, ahead)
+    return register(m, Mux(near, b0, tracked), len(b0), f"sgm_left_b{k}",
+                    slots.first(at) if enable is None else enable)

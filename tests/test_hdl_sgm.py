@@ -24,7 +24,7 @@ from npstereo.golden import sgm as golden_sgm
 from npstereo.hdl import banks, calculation_stage, plan, plan_memories, plan_structure, \
     plan_timing
 from npstereo.hdl import sgm as hdl_sgm
-from npstereo.hdl import sgm_left
+from npstereo.hdl import sgm_left, sgm_left_reference
 from npstereo.hdl.sgm import GUIDE, SemiGlobalAggregation
 from npstereo.params import ParameterError, StereoParams
 
@@ -151,6 +151,7 @@ STAGES = [
     ("census", 3, 8, 8, 3, 20, 2, 10, 5),            # one lane, R = D
     ("census", 3, 4, 1, 3, 20, 2, 40, 3),            # R = 1: four lanes, one clock a position
     ("census", 5, 8, 1, 16, 96, 4, 38, 3),           # R = 1, eight lanes (T = 3)
+    ("census", 5, 64, 1, 16, 96, 4, 80, 3),          # R = 1, 64 lanes: the history's readers
     ("census", 5, 16, 2, 16, 96, 4, 36, 3),          # R = 2, eight lanes, shifting stores
     ("census", 3, 24, 8, 4, 20, None, 26, 3),        # three lanes, constant P2
     ("rank", 5, 15, 3, 7, 40, 5, 36, 3),             # R = 3: two-clock update, store read early
@@ -220,10 +221,16 @@ def test_broken_left_pairs_odd_choice_is_caught(monkeypatch):
     assert_stage_caught(monkeypatch, params)
 
 
-def test_broken_left_history_is_caught(monkeypatch):
+#: Rows longer than K: at R = 1, D = 64 the history's readers, at R = 2 its chain.
+HISTORY_CASES = [sgm_params("census", 5, 64, 1, 16, 96, 4, width=80, height=3),
+                 sgm_params("census", 5, 16, 2, 16, 96, 4, width=40, height=3)]
+
+
+@pytest.mark.parametrize("params", HISTORY_CASES, ids=["readers", "chain"])
+def test_broken_left_history_is_caught(monkeypatch, params):
     """b(x) from the history one position too new (argmin of x - K + 1): rows longer than
     K catch it."""
-    params = sgm_params("census", 3, 4, 1, 3, 20, 2, width=40, height=3)
+    assert plan_timing.sgm_timing(params).left_chain == (8 if params.rounds == 1 else 1)
     real = sgm_left._picks
 
     def shifted(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
@@ -231,6 +238,16 @@ def test_broken_left_history_is_caught(monkeypatch):
             return column(offset) + 1
         return real(owner, m, later, fresh_at, history, b0, lu, chosen, sums)
     monkeypatch.setattr(sgm_left, "_picks", shifted)
+    assert_stage_caught(monkeypatch, params)
+
+
+def test_broken_left_chain_gaps_are_caught(monkeypatch):
+    """The history's chain shifted in every slot, not only in those with a position (the
+    gaps between positions then shift it too far)."""
+    params = HISTORY_CASES[1]
+    check_stage(params, monkeypatch, seed=7)
+    monkeypatch.setattr(sgm_left_reference, "_chain_shift",
+                        lambda owner, at: owner._slots.first(at))
     assert_stage_caught(monkeypatch, params)
 
 
