@@ -31,7 +31,7 @@ top level ``npstereo_core`` with AXI4-Stream port names.
 
 from dataclasses import dataclass
 
-from amaranth.hdl import Const, Module, Mux, Signal
+from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
@@ -44,7 +44,7 @@ from .lr_check import LRCheck
 from .median import Median3
 from .plan import check_buildable
 from .plan_structure import masks_after_compare
-from .plan_timing import core_timing, latency
+from .plan_timing import core_timing, decision_clocks, latency
 from .stream import PixelPair, disparity_word, framed
 from .stream_parts import InputQueue, RegisterSlice
 from .subpixel import SubpixelFit
@@ -254,7 +254,11 @@ class NpStereoCore(wiring.Component):
             "drop", "can_start", "restart", "can_take", "misframed", "last_beat",
             "frame_end", "credit", "flush_start", "done")})
         now = Signal(conditions)
-        can_start = head_valid & head.first & ~inp.switch_pending & has_credit
+        # At R = 1 the decision reaches the input stage a clock later (below), and with it
+        # the stage's switch_pending: the starts in those clocks hold back the next one.
+        handed_starts = Signal(3, name="handed_starts")
+        pending = inp.switch_pending | (handed_starts.any() if rounds == 1 else 0)
+        can_start = head_valid & head.first & ~pending & has_credit
         m.d.comb += [
             now.drop.eq(head_valid & ~head.first),      # a beat without a start of frame
             now.can_start.eq(can_start),
@@ -321,7 +325,16 @@ class NpStereoCore(wiring.Component):
                 m.d.comb += proposed.admit.eq(given.credit)
         if rounds == 1:
             def decision(group, copy):
-                return proposed
+                if group == "framing":
+                    return proposed
+                # The input stage's copy registered here, by the admission: the queue's
+                # head through the admission into the line buffers' read address (a
+                # register by the block RAMs) was census 7x7 box's critical path at
+                # 640 x 480 (11.36 ns, 5.79 of it one wire).
+                latched = Signal(proposal, name=f"decision_{group}")
+                m.d.sync += [latched.eq(proposed), handed_starts.eq(
+                    Cat(proposed.admit & proposed.start, handed_starts[:2]))]
+                return latched
         else:
             def decision(group, copy):
                 # Loaded in round R-2 (a clock enable, no logic) and used only in round
@@ -384,8 +397,9 @@ class NpStereoCore(wiring.Component):
         # later, by a flag registered with them twice: the decision's register reached the
         # pixels' multiplexers by the line buffers across the core (census 9x9 and ext.
         # rank 7x7 on ECP5: 7.9 ns through one LUT, also with one register between).
-        raw = pipe(m, head_pixels, 2, "raw_pixels")
-        taken = pipe(m, take, 2, "taken")
+        late_input = decision_clocks(rounds)
+        raw = pipe(m, head_pixels, 2 + late_input, "raw_pixels")
+        taken = pipe(m, take, 2 + late_input, "taken")
         pixels = Signal(PixelPair, reset_less=True)
         m.d.sync += pixels.eq(Mux(taken, raw, 0))
 

@@ -15,8 +15,9 @@ __all__ = ["SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS", "sgm_row_clocks", "SGM_ABOVE_EV
            "FifthTiming", "sgm_fifth_timing"]
 
 
-#: Clocks from the SGM stage's input to each path's P2: the intensity steps, then P2.
-SGM_GUIDE_CLOCKS = 2
+#: Clocks from the SGM stage's input to each path's P2: the intensity differences, their
+#: magnitudes (the steps), then P2.
+SGM_GUIDE_CLOCKS = 3
 
 
 #: Clocks from the SGM stage's input to L of the paths from the row above (round 0): the

@@ -22,7 +22,7 @@ from .plan_sgm_timing import (SGM_ABOVE_EVERY, SGM_GUIDE_CLOCKS, SGM_LEFT_LEAD, 
                               sgm_row_clocks, sgm_timing, sgm_tree_clocks)
 from .trees import DEFAULT_EVERY, min_tree_latency
 
-__all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
+__all__ = ["INPUT_LATENCY", "decision_clocks", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
            "sgm_row_clocks", "SGM_ABOVE_EVERY", "SGM_LEFT_LEAD", "sgm_left_stages",
@@ -39,6 +39,13 @@ __all__ = ["INPUT_LATENCY", "MAX_SKEW_ONE_ROUND", "unit_skews", "VERTICAL_READ",
 #: its output register, the window's shift, the masked window's register, a second
 #: register of the window and the centres' copies.
 INPUT_LATENCY = 5
+
+
+def decision_clocks(rounds):
+    """Clocks from the admission's decision to the input stage: at R = 1 the decision is
+    registered by the admission (hdl/core.py), and the input stage takes it a clock
+    later."""
+    return 1 if rounds == 1 else 0
 #: Registers every output word passes after ``CoreTiming.output`` besides the output queue
 #: and the port's register slice: its register into the queue and the slice by the queue
 #: (hdl/core.py).
@@ -246,11 +253,18 @@ class CoreTiming:
     queue_depth: int    #: words of the output queue
 
 
+#: Clocks a credit is away after ``CoreTiming.output``: the word's register into the output
+#: queue, the queue's two (SyncFIFOBuffered), then the returned credit's register, the
+#: counter and its room flag (hdl/core.py). Left out of the queue's depth, a steady stream
+#: at R = 1 waited for credits (3 clocks in 67, census 3x3 SGM with the fifth path).
+CREDIT_RETURN = 6
+
+
 def core_timing(params, every=DEFAULT_EVERY):
     """The core's offsets, and the output queue's depth: every position in flight between
     admission and the queue must find room for its word (a credit is taken at admission),
     plus a few words so that a steady stream never waits for a credit."""
-    calculation = INPUT_LATENCY
+    calculation = decision_clocks(params.rounds) + INPUT_LATENCY
     timing = calculation_timing(params, every)
     sums = calculation + timing.sums
     evaluation = calculation + timing.latency
@@ -258,7 +272,7 @@ def core_timing(params, every=DEFAULT_EVERY):
     output = sums + lr_timing(params, left - sums).latency
     if params.median:
         output += MEDIAN_LATENCY
-    depth = 1 << (-(-output // params.rounds) + 4).bit_length()
+    depth = 1 << (-(-(output + CREDIT_RETURN) // params.rounds) + 4).bit_length()
     return CoreTiming(calculation, sums, evaluation, left, output, depth)
 
 

@@ -68,8 +68,9 @@ def measured_flush(params):
             if offering and ctx.get(core.sink.ready):
                 index += 1
             if ctx.get(core.input_stage.admit):
-                # The admission's decision: its slot starts in the next clock.
-                events["admitted"].append(clock + 1)
+                # The admission's decision (the input stage sees it decision_clocks later):
+                # its slot starts in the clock after it.
+                events["admitted"].append(clock + 1 - plan_timing.decision_clocks(params.rounds))
             if _last_word(ctx, core, params):
                 events["last_word"] = clock
                 break
