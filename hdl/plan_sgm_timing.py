@@ -134,6 +134,7 @@ class SgmTiming:
     left_chain_at: int  #: where position p shifts the chain (b(p + J) read from the history)
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
+    above: int          #: the sum of those three L
     minima: int         #: their minima m(x) are written (the last round's running minimum)
     latency: int        #: the summed costs S
 
@@ -220,7 +221,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
                      history, sum_clocks, start_early, picks, chain, chain_at, left, rows,
-                     rows + tree + rounds, summed)
+                     above, rows + tree + rounds, summed)
 
 
 def sgm_delays(params, every=DEFAULT_EVERY):
@@ -228,9 +229,8 @@ def sgm_delays(params, every=DEFAULT_EVERY):
     of the three paths from above (``above``) and the left path's L (``left``) to where
     they are added, and the left path's Lu to its normalisation by m(x - 1) (``lu``)."""
     t = sgm_timing(params, every)
-    above = t.rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
-    aligned = max(t.left, above)
-    return {"above": aligned - above, "left": aligned - t.left, "lu": t.left - 1 - t.left_lu}
+    aligned = max(t.left, t.above)
+    return {"above": aligned - t.above, "left": aligned - t.left, "lu": t.left - 1 - t.left_lu}
 
 
 @dataclass(frozen=True)

@@ -191,6 +191,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
                  for i in range(units)]
         delays = sgm_delays(p, self.every)
         above_bits = len(above[0])
+        assert above_bits == p.path_cost_bits + 2, "plan_memories counts its delay line so"
         above = split_lanes(delay_line(m, Cat(*above), delays["above"], "sgm_above_aligned"),
                             units, above_bits)
         left = split_lanes(delay_line(m, Cat(*left), delays["left"], "sgm_left_aligned"),
