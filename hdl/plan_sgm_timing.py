@@ -132,6 +132,7 @@ class SgmTiming:
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
     left_chain: int     #: the first k whose b(p + k) comes down the chain (the rest read)
     left_chain_at: int  #: where position p shifts the chain (b(p + J) read from the history)
+    left_chain_history: int  #: clocks of the multiplexer that reads b(p + J) for the chain
     left: int           #: L of the left path
     rows: int           #: L of the paths from the row above
     above: int          #: the sum of those three L
@@ -204,6 +205,12 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     ready = argmin + history - (age - steps) * rounds
     chain = next(k for k, at in enumerate(picks, 1) if at >= ready)
     chain_at = picks[chain - 1]
+    # The chain's one reader in three clocks (the group's choice registered too) where
+    # G(p + J - K) is there for it: the entry's index through the first level into its
+    # register was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4 (6.75 ns,
+    # 4 levels, 148.2 MHz).
+    chain_history = 3 if (chain_at >= 3 and
+                          chain_at - 3 + (age - steps) * rounds >= argmin) else history
     assert list(picks) == sorted(picks), picks
     # Lu(x - J, b) in its file before position x reads it at ``reference``.
     assert lu + rounds + 1 <= steps * rounds + reference
@@ -220,7 +227,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
-                     history, sum_clocks, start_early, picks, chain, chain_at, left, rows,
+                     history, sum_clocks, start_early, picks, chain, chain_at, chain_history, left, rows,
                      above, rows + tree + rounds, summed)
 
 

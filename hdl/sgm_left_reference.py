@@ -18,9 +18,10 @@ def _pick_groups(count, lane_bits):
     return -(-count // (1 << (lane_bits + 1) // 2))
 
 
-def _pick(m, values, lane, name, copies=None):
+def _pick(m, values, lane, name, copies=None, registered=False):
     """values[lane] in two clocks: the lane's low bits select within groups (registered),
-    the high bits the group (returned combinationally, a clock after ``values``).
+    the high bits the group (returned combinationally, a clock after ``values``; with
+    ``registered`` into a register, two clocks after).
     ``copies``: the lane once per group (:func:`_pick_groups`), each group's select its
     own register."""
     width = len(values[0])
@@ -34,8 +35,10 @@ def _pick(m, values, lane, name, copies=None):
               for copy, k in zip(copies, range(0, len(values), size))]
     high = register(m, lane[low:], max(1, len(lane) - low), f"{name}_high")
     if len(groups) == 1:
-        return groups[0]
-    return Array(_padded(groups, 1 << len(high)))[high]
+        chosen = groups[0]
+    else:
+        chosen = Array(_padded(groups, 1 << len(high)))[high]
+    return register(m, chosen, width, f"{name}_chosen") if registered else chosen
 
 
 def _padded(values, count):
@@ -103,7 +106,8 @@ def pick_references(owner, m, column, fresh_at, history, b0, lu, chosen, sums):
                for k, at in enumerate(t.left_picks[:t.left_chain - 1], 1)}
     shift_at = t.left_chain_at
     shift = _chain_shift(owner, shift_at)
-    link = _history_read(owner, m, column, history, b0, steps, shift_at, shift)
+    link = _history_read(owner, m, column, history, b0, steps, shift_at, shift,
+                         t.left_chain_history)
     for k in range(steps, t.left_chain - 1, -1):
         if k < steps:
             link = register(m, Mux(_young(m, column, k, shift_at, t.left_history), b0, link),
@@ -147,19 +151,22 @@ def _young(m, column, k, at, ahead):
     # (Always young where the column cannot pass K - k: a comparison with a constant
     # beyond the column's range is a lint warning.)
     young = Const(1) if SGM_TRACK_AGE - k >= (1 << len(x)) - 1 else x <= SGM_TRACK_AGE - k
-    near = register(m, young, 1, f"sgm_left_young{k}_{at}")
-    return register(m, near, 1, f"sgm_left_young{k}_{at}_at") if ahead == 2 else near
+    for step in range(ahead):
+        young = register(m, young, 1, f"sgm_left_young{k}_{at}_{step}")
+    return young
 
 
-def _history_read(owner, m, column, history, b0, k, at, enable=None):
+def _history_read(owner, m, column, history, b0, k, at, enable=None, ahead=None):
     """b(p + k) into a register loaded at ``at`` (in round 0, or while ``enable``): entry
-    (p + k) mod K of the history, or G(0) where p + k <= K."""
+    (p + k) mod K of the history, or G(0) where p + k <= K; the multiplexer in ``ahead``
+    clocks (default ``timing.left_history``)."""
     # The comparison and the history's address from the column ahead, and the history's
     # multiplexer in two clocks where the margins allow (the entry's low bits within
     # groups, registered, then the group): in front of the multiplexer they were census
     # 7x7 SGM's critical path (13.5 ns, ECP5), and the multiplexer in one clock was next
     # (9.9 ns, five LUT levels, at R = 10).
-    ahead, slots = owner.timing.left_history, owner._slots
+    slots = owner._slots
+    ahead = owner.timing.left_history if ahead is None else ahead
     x = column(at - ahead)
     # The entry once per group of the history's multiplexer: one register into the
     # selects of all K = 32 entries was census 7x7 SGM's critical path at R = 10
@@ -168,8 +175,9 @@ def _history_read(owner, m, column, history, b0, k, at, enable=None):
     entries = [replica(m, (x + k)[:entry_bits], f"sgm_left_history_at{k}_{g}",
                        unsigned(entry_bits), reset_less=True)
                for g in range(_pick_groups(SGM_TRACK_AGE, entry_bits))]
-    if ahead == 2:
-        tracked = _pick(m, history, entries[0], f"sgm_left_history{k}", entries)
+    if ahead >= 2:
+        tracked = _pick(m, history, entries[0], f"sgm_left_history{k}", entries,
+                        registered=ahead == 3)
     else:
         tracked = Array(history)[entries[0]]
     near = _young(m, column, k, at, ahead)
