@@ -193,13 +193,15 @@ SPURIOUS_ERROR = FRESH + """  assign m_axis_tdata = tdata, m_axis_tlast = tlast,
 
 @pytest.mark.parametrize("wrapper,group,failing,depth", [
     (TOGGLING_TDATA, "induction", "hold", 36), (VALID_AFTER_RESET, "induction", "reset", 6),
-    (DROPPED_LAST, "free", "markers", 36), (SPURIOUS_WORD, "free", "no_spurious", 6),
+    (DROPPED_LAST, "free", "markers", None), (SPURIOUS_WORD, "free", "no_spurious", 6),
     (SPURIOUS_WORD, "framed", "frame_count", 6),
     (SPURIOUS_ERROR, "misframed", "misframe_flag", 6)])
 def test_broken_core_fails_with_a_trace(wrapper, group, failing, depth, tmp_path):
     """Each property that a bounded depth reaches fails on a core broken for it (the two
-    completion properties, ``*_whole``, are beyond the depths the tests can afford)."""
+    completion properties, ``*_whole``, are beyond the depths the tests can afford). A
+    depth of None: the default, past the first line of words (the first last marker)."""
     params = StereoParams(transform="census", **TINY)
+    depth = default_depth(params) if depth is None else depth
     core = tmp_path / "broken.v"
     core.write_text(_broken_core(params, wrapper))
     verdicts = prove(core, params, tmp_path, depth=depth, timeout=60, groups=(group,))
