@@ -31,7 +31,7 @@ top level ``npstereo_core`` with AXI4-Stream port names.
 
 from dataclasses import dataclass
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal
+from amaranth.hdl import Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
@@ -254,11 +254,10 @@ class NpStereoCore(wiring.Component):
             "drop", "can_start", "restart", "can_take", "misframed", "last_beat",
             "frame_end", "credit", "flush_start", "done")})
         now = Signal(conditions)
-        # At R = 1 the decision reaches the input stage a clock later (below), and with it
-        # the stage's switch_pending: the starts in those clocks hold back the next one.
-        handed_starts = Signal(3, name="handed_starts")
-        pending = inp.switch_pending | (handed_starts.any() if rounds == 1 else 0)
-        can_start = head_valid & head.first & ~pending & has_credit
+        # With the input stage's decision a clock late (decision_clocks, below), its
+        # switch_pending rises a clock late too: the start of that clock holds the next one.
+        start_held = Signal(name="start_held")
+        can_start = head_valid & head.first & ~(inp.switch_pending | start_held) & has_credit
         m.d.comb += [
             now.drop.eq(head_valid & ~head.first),      # a beat without a start of frame
             now.can_start.eq(can_start),
@@ -325,16 +324,7 @@ class NpStereoCore(wiring.Component):
                 m.d.comb += proposed.admit.eq(given.credit)
         if rounds == 1:
             def decision(group, copy):
-                if group == "framing":
-                    return proposed
-                # The input stage's copy registered here, by the admission: the queue's
-                # head through the admission into the line buffers' read address (a
-                # register by the block RAMs) was census 7x7 box's critical path at
-                # 640 x 480 (11.36 ns, 5.79 of it one wire).
-                latched = Signal(proposal, name=f"decision_{group}")
-                m.d.sync += [latched.eq(proposed), handed_starts.eq(
-                    Cat(proposed.admit & proposed.start, handed_starts[:2]))]
-                return latched
+                return proposed
         else:
             def decision(group, copy):
                 # Loaded in round R-2 (a clock enable, no logic) and used only in round
@@ -352,6 +342,18 @@ class NpStereoCore(wiring.Component):
                 return latched
         chosen = decision("framing", 0)
         handed = decision("input", 1)
+        if decision_clocks(rounds):
+            # At R = 1 the input stage's copy is registered here, by the admission: the
+            # queue's head through the admission into the line buffers' read address (a
+            # register by the block RAMs) was census 7x7 box's critical path at 640 x 480
+            # (11.36 ns, 5.79 of it one wire). The stage raises switch_pending three clocks
+            # after a start reaches it; the clock it now comes later is held here (3x1
+            # frames back to back catch it, tests/test_hdl_core.py).
+            latched = Signal(proposal, name="decision_input")
+            m.d.sync += latched.eq(handed)
+            handed = latched
+            m.d.comb += start_held.eq(pipe(m, handed.admit & handed.start, 2, "start_late",
+                                           reset=True))
         # The credits and the count of frames in flight sit by the output: they take the
         # decision a clock late, through a register of its own (a copy loaded from the
         # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5). With R >= 2

@@ -82,6 +82,18 @@ def test_two_frames_back_to_back(line_buffer):
     assert result["errors"] == 0
 
 
+@pytest.mark.parametrize("width,height", [(3, 1), (4, 1), (3, 2)])
+def test_tiny_frames_back_to_back(width, height):
+    """Frames of three to six pixels back to back at R = 1, without stalls: each start
+    comes a few clocks after the one before, where the input stage's switch_pending (a
+    clock late behind the decision's register) has not risen yet."""
+    params = StereoParams(transform="census", block=3, disparities=2, rounds=1,
+                          aggregation=1, lr_threshold=None, width=width, height=height)
+    pairs = [stereo_pair("independent", height, width, seed) for seed in range(5)]
+    check_frames(params, pairs, [beat for pair in pairs for beat in frame_beats(*pair)],
+                 valid_prob=1.0, ready_prob=1.0, seed=1)
+
+
 def test_cost_bank_choice_in_levels(monkeypatch):
     """A cost line buffer of 20 banks (banks of 2 words, W*R = 40): the bank is chosen in
     three registered levels, and the core's timing takes the two clocks more, across two
