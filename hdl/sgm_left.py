@@ -43,9 +43,10 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_LEFT_P1_PARITY, SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import (LaneStores, ShiftStore, Store, bits_for, delay_line, register, replica,
-                     split_lanes)
-from .plan_timing import sgm_delays, sgm_left_firsts_registered, sgm_left_shift_store
+from .common import LaneStores, Store, bits_for, delay_line, register, replica, split_lanes
+from .plan_timing import sgm_delays, sgm_left_firsts_registered
+from .sgm_left_choice import copies, less, minimum
+from .sgm_left_pairs import pair_update
 from .sgm_left_reference import pick_references as _picks, reference_sum
 from .trees import build_min_tree
 
@@ -73,48 +74,16 @@ class PathOwner:
 
     def _lane_copies(self, m, value, start, offset, name):
         """:meth:`_aligned` to ``offset`` > ``start``, its last register copied per group of
-        lanes (:func:`_copies`): the list of each lane's copy."""
+        lanes (:func:`.sgm_left_choice.copies`): the list of each lane's copy."""
         if isinstance(value, Const):
             return [value] * self.params.per_round
         early = self._aligned(value, start, offset - 1, name)
-        return _copies(m, early, value.shape(), self.params.per_round, f"{name}_s{offset}",
+        return copies(m, early, value.shape(), self.params.per_round, f"{name}_s{offset}",
                        self._slots.first(offset - 1))
 
 
-def _less(a, b, bits):
-    """a < b for values kept modulo 2^bits that differ by less than 2^(bits - 1)."""
-    return (a - b)[bits - 1]
-
-
-def _minimum(candidates, bits, small=None):
-    """The smallest of ``candidates`` (ties to the first): all comparisons side by side,
-    then a one-hot choice. Returns (comparison bits, choice from them).
-
-    With ``small`` (a flag), candidates 1 and 2 (the neighbours + P1) take part only where
-    it is set: there the comparisons they win are cleared and those they lose set, one more
-    input of the comparisons' LUTs, nothing in front of them."""
-    count = len(candidates)
-    beats = {(i, k): _less(candidates[i], candidates[k], bits)
-             for i in range(count) for k in range(count) if i > k}
-    if small is not None:
-        for (i, k), bit in beats.items():
-            if k == 0 and i in (1, 2):
-                beats[(i, k)] = bit & small
-            elif i == 3 and k in (1, 2):
-                beats[(i, k)] = bit | ~small
-
-    def choose(beats):
-        value = Const(0, bits)
-        for i, candidate in enumerate(candidates):
-            wins = Const(1)
-            for k in range(count):
-                if k < i:
-                    wins &= beats[(i, k)]
-                elif k > i:
-                    wins &= ~beats[(k, i)]
-            value |= Mux(wins, candidate, 0)
-        return value
-    return beats, choose
+#: Lanes per copy of m(x - 1) and of the fresh start in the output's subtraction.
+_OUTPUT_LANES_PER_COPY = 4
 
 
 def _file(m, count, shape, name):
@@ -146,20 +115,6 @@ def _running_argmin(owner, m, item, offset, less, name):
     return best, best_round, best_lane
 
 
-#: Lanes per copy of a scalar that every lane uses (ref + P2, the fresh start).
-_LANES_PER_COPY = 8
-#: The same for m(x - 1) and the fresh start of the output's subtraction.
-_OUTPUT_LANES_PER_COPY = 4
-
-
-def _copies(m, value, shape, lanes, name, enable=None, per=_LANES_PER_COPY):
-    """``value`` registered once per group of ``per`` lanes: the list of each lane's
-    copy."""
-    groups = [replica(m, value, f"{name}_copy{k}", shape, enable, reset_less=True)
-              for k in range(-(-lanes // per))]
-    return [groups[i // per] for i in range(lanes)]
-
-
 def left_path(owner, m, fresh, p2):
     """L of the left path per lane at ``timing.left`` (see the module docstring).
 
@@ -177,8 +132,8 @@ def left_path(owner, m, fresh, p2):
     lu_at, argmin_at = t.left_lu, t.left_argmin
     lane_bits, round_bits = bits_for(units - 1), bits_for(rounds - 1)
 
-    def less(a, b):
-        return _less(a, b, bits)
+    def modular_less(a, b):
+        return less(a, b, bits)
 
     def column(offset):
         return owner._aligned(owner.tag.x, 0, offset, "sgm_left_x")
@@ -208,20 +163,20 @@ def left_path(owner, m, fresh, p2):
     sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
 
     # ref(x) + P2(x), loaded at ``left_reference`` and held through the slot.
-    reference = _copies(m, reference_sum(owner, m, column, m0, p2, chosen, sums), bits, units,
+    reference = copies(m, reference_sum(owner, m, column, m0, p2, chosen, sums), bits, units,
                         "sgm_left_ref", slots.first(t.left_reference))
-    update = _pair_update if t.left_pairs else _lane_update
+    update = pair_update if t.left_pairs else _lane_update
     lu = update(owner, m, reference, fresh_at, column)
 
     # m(x) and G(x) = argmin Lu(x, .), complete at ``argmin_at``.
-    item = _argmin(m, lu, less, "sgm_left_lu_min", t.left_argmin_split)
-    minimum, best_round, best_lane = _running_argmin(owner, m, item, argmin_at - rounds, less,
-                                                     "sgm_left_lu_min")
+    item = _argmin(m, lu, modular_less, "sgm_left_lu_min", t.left_argmin_split)
+    lowest, best_round, best_lane = _running_argmin(owner, m, item, argmin_at - rounds,
+                                                    modular_less, "sgm_left_lu_min")
     done = valid(argmin_at)
     # m(x) (and below the fresh start) in a copy per group of four lanes: one register of
     # it into every lane's subtraction was census 7x7 SGM's path at R = 10 (7.19 ns, 5.54
     # of it routing), one per eight lanes still 6.64 ns (4.49).
-    previous_m = _copies(m, minimum, bits, units, "sgm_left_m", done, _OUTPUT_LANES_PER_COPY)
+    previous_m = copies(m, lowest, bits, units, "sgm_left_m", done, _OUTPUT_LANES_PER_COPY)
     # Each entry's write enable decoded a clock ahead into a register of its own: the slot
     # pulse through the decoder into all K entries' enables was census 7x7 SGM's path at
     # R = 10 (6.74 ns, 5.51 of it routing).
@@ -235,7 +190,7 @@ def left_path(owner, m, fresh, p2):
 
     # L(x, d) = Lu(x, d) - m(x - 1): Lu waits for m(x - 1).
     out = t.left - 1
-    fresh_out = _copies(m, fresh_at(out - 1), 1, units, "sgm_left_fresh_out",
+    fresh_out = copies(m, fresh_at(out - 1), 1, units, "sgm_left_fresh_out",
                         per=_OUTPUT_LANES_PER_COPY)
     assert out - lu_at == sgm_delays(p)["lu"]
     delayed = split_lanes(delay_line(m, Cat(*lu), out - lu_at, "sgm_left_lu_delay"), units, bits)
@@ -246,7 +201,7 @@ def left_path(owner, m, fresh, p2):
 
 def _lane_update(owner, m, reference, fresh_at, column):
     """Lu(x, .) per lane in a register at ``timing.left_lu`` from a loop over one position
-    (R >= 2; module docstring): round j of x reads Lu(x - 1, round j) at ``loop`` + j."""
+    (R >= 3; module docstring): round j of x reads Lu(x - 1, round j) at ``loop`` + j."""
     p, t, slots = owner.params, owner.timing, owner._slots
     units, rounds, bits, costs, loop = p.per_round, p.rounds, p.left_loop_bits, owner._costs, \
         t.loop
@@ -257,24 +212,19 @@ def _lane_update(owner, m, reference, fresh_at, column):
     # A word holds Lu and Lu + P1 of every lane (the + P1 added beside Lu, outside the
     # loop's path: the word's read, + P1 and the comparisons were census 7x7 SGM's
     # critical path at R = 10, 6.70 ns, nine levels).
-    shifting = sgm_left_shift_store(rounds)
-    if shifting:
-        store = ShiftStore(m, "sgm_left_store", unsigned(2 * units * bits), rounds)
-        word = store.oldest
-    else:
-        # LUT RAM read a clock early into a register: Lu(x - 1, round j) was written in
-        # clock T - R + j + stages - 1 <= T + j - 2 (R >= 3). The round counter, the LUT
-        # RAM's read and + P1 in front of the comparisons were census 7x7 SGM's critical
-        # path at R = 10 (9.44 ns, 106 MHz), the read, + P1 and the comparisons census 5x5
-        # SGM's at 1280 x 720, D = 64, R = 4 (10.76 ns, 92.9 MHz).
-        # One LUT RAM per few lanes, each read at a round counter of its own (round loop - 1
-        # is round loop - 2 a clock later): one counter into every lane's read address
-        # recurred in census 7x7 SGM's placements at R = 10 (13-14 endpoints, wire only).
-        store = LaneStores(m, "sgm_left_store", units, bits, rounds, sections=2)
-        word = register(m, store.read(lambda k: replica(m, slots.round(loop - 2),
-                                                        f"sgm_left_read_round{k}",
-                                                        reset_less=True)),
-                        2 * units * bits, "sgm_left_word")
+    # LUT RAM read a clock early into a register: Lu(x - 1, round j) was written in clock
+    # T - R + j + stages - 1 <= T + j - 2. The round counter, the LUT RAM's read and + P1
+    # in front of the comparisons were census 7x7 SGM's critical path at R = 10 (9.44 ns,
+    # 106 MHz), the read, + P1 and the comparisons census 5x5 SGM's at 1280 x 720, D = 64,
+    # R = 4 (10.76 ns, 92.9 MHz).
+    # One LUT RAM per few lanes, each read at a round counter of its own (round loop - 1
+    # is round loop - 2 a clock later): one counter into every lane's read address
+    # recurred in census 7x7 SGM's placements at R = 10 (13-14 endpoints, wire only).
+    store = LaneStores(m, "sgm_left_store", units, bits, rounds, sections=2)
+    word = register(m, store.read(lambda k: replica(m, slots.round(loop - 2),
+                                                    f"sgm_left_read_round{k}",
+                                                    reset_less=True)),
+                    2 * units * bits, "sgm_left_word")
     centre, plus = split_lanes(word, units, bits), split_lanes(word[units * bits:], units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
@@ -283,60 +233,48 @@ def _lane_update(owner, m, reference, fresh_at, column):
     # the counter, the store's read and the comparisons in one clock were census 7x7 SGM's
     # critical path at R = 10 (10.6 ns).
     before = register(m, plus[units - 1], bits, "sgm_left_before")
-    firsts = None
-    if rounds > 1:
-        first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
-        last_round = register(m, slots.round(loop - 1) == rounds - 1, 1,
-                              "sgm_left_last_round")
-        # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before.
-        firsts = ShiftStore(m, "sgm_left_firsts", unsigned(bits), rounds - 1) if shifting \
-            else Store(m, "sgm_left_firsts", unsigned(bits), rounds)
-        # The round counter two clocks earlier reads j + 1 (mod R) a clock before round j.
-        just_written = None
-        if shifting:
-            following = firsts.oldest
-        else:
-            following = register(m, firsts.read(slots.round(loop - 2)), bits,
-                                 "sgm_left_following")
-        if not shifting and not sgm_left_firsts_registered(rounds):
-            # R = 3, 4: the word is written in the clock before its read when the slot
-            # before held a position, and a clock too late for the early read; it is then
-            # taken from the write's own register. Read through the LUT RAM at the round
-            # counter, it was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4
-            # (9.83 ns, 101.8 MHz).
-            just_written = Signal(bits, name="sgm_left_just_written", reset_less=True)
-            just_valid = Signal(name="sgm_left_just_valid")
-            following = Mux(just_valid, just_written, following)
-        below = Mux(first_round, plus[0], before)
-        above = Mux(last_round, plus[units - 1], following)
-    else:
-        below, above = plus[0], plus[units - 1]
+    first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
+    last_round = register(m, slots.round(loop - 1) == rounds - 1, 1, "sgm_left_last_round")
+    # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before:
+    # the round counter two clocks earlier reads j + 1 (mod R) a clock before round j.
+    firsts = Store(m, "sgm_left_firsts", unsigned(bits), rounds)
+    following = register(m, firsts.read(slots.round(loop - 2)), bits, "sgm_left_following")
+    just_written = None
+    if not sgm_left_firsts_registered(rounds):
+        # R = 3, 4: the word is written in the clock before its read when the slot before
+        # held a position, and a clock too late for the early read; it is then taken from
+        # the write's own register. Read through the LUT RAM at the round counter, it was
+        # census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4 (9.83 ns, 101.8 MHz).
+        just_written = Signal(bits, name="sgm_left_just_written", reset_less=True)
+        just_valid = Signal(name="sgm_left_just_valid")
+        following = Mux(just_valid, just_written, following)
+    below = Mux(first_round, plus[0], before)
+    above = Mux(last_round, plus[units - 1], following)
     neighbours = [below, *plus, above]
     last = loop + t.left_stages - 1           # the clock that writes Lu(x, round j)
     # With the choice registered, a fresh start zeroes that register (its flip-flops'
     # synchronous reset) instead of a multiplexer behind it: the fresh flag's copy through
     # the multiplexer and the additions into the store's write was census 7x7 SGM's
     # critical path at R = 10 in two placements of three (6.73 and 7.47 ns).
-    fresh_chosen = (_copies(m, fresh_at(last - 2), 1, units, "sgm_left_fresh_lane")
+    fresh_chosen = (copies(m, fresh_at(last - 2), 1, units, "sgm_left_fresh_lane")
                     if t.left_stages == 3 else None)
     lanes = []
     for i in range(units):
         candidates = [centre[i], neighbours[i], neighbours[i + 2], reference[i]]
-        beats, choose = _minimum(candidates, bits, small[i])
-        if t.left_stages >= 2:
-            # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
-            candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
-                          for k, c in enumerate(candidates)]
-            beats = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
-                     for key, b in beats.items()}
-            _, choose = _minimum(candidates, bits)
+        beats, _ = minimum(candidates, bits, small[i])
+        # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
+        candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
+                      for k, c in enumerate(candidates)]
+        beats = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
+                 for key, b in beats.items()}
+        _, choose = minimum(candidates, bits)
         best = choose(beats)
         if fresh_chosen is not None:
             # Then add: R - 1 >= 3 clocks to spare.
             best = register(m, Mux(fresh_chosen[i], 0, best), bits, f"sgm_left_best{i}")
         lanes.append(best)
     if fresh_chosen is None:
-        fresh_copies = _copies(m, fresh_at(last - 1), 1, units, "sgm_left_fresh_lane")
+        fresh_copies = copies(m, fresh_at(last - 1), 1, units, "sgm_left_fresh_lane")
         lanes = [Mux(f, 0, best) for f, best in zip(fresh_copies, lanes)]
     new = [(c + best)[:bits] for c, best in zip(costs[last], lanes)]
     # Lu + P1 from C + P1 (registered a clock before): one addition to the store, as Lu's.
@@ -344,110 +282,8 @@ def _lane_update(owner, m, reference, fresh_at, column):
                   for i, c in enumerate(costs[last - 1])]
     new_plus = [(c + best)[:bits] for c, best in zip(costs_plus, lanes)]
     store.write(slots.round(last), Cat(*new, *new_plus), owner._valid_at(last))
-    if firsts is not None:
-        first = new_plus[0]
-        firsts.write(slots.round(last), first, owner._valid_at(last))
-        if just_written is not None:
-            m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
+    first = new_plus[0]
+    firsts.write(slots.round(last), first, owner._valid_at(last))
+    if just_written is not None:
+        m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
     return [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
-
-
-def _pair_update(owner, m, reference, fresh_at, column):
-    """Lu(x, .) per lane in a register at ``timing.left_lu`` from a loop over two positions
-    (R = 1, ``plan_timing.sgm_left_pairs``; docs/hardware.md, "The left path at R = 1").
-
-    With the small step only into odd columns, an even column x has
-
-        Lu(x) = min(S + Lu(x-2, d), S + Lu(x-2, d +- 1) + P1, S + Q(x-1), C(x) + Q(x)),
-
-    S = C(x-1, d) + C(x, d) and Q = ref + P2: the five candidates are compared as
-    Lu(x-2, d), Lu(x-2, d +- 1) + P1, Q(x-1) and Q(x) - C(x-1, d) in the clock ``loop``
-    (those among the first four in every clock, from registers), and chosen and added to S
-    in the next: the loop's state, Lu of the last even column, is read two clocks after it
-    is written. An odd column x' takes the first four's comparisons a clock after its slot
-    (Lu(x' - 1) is written then) and chooses and adds C(x') in the next, outside the loop.
-    Every register below is written only in slots with a position (gaps hold them).
-    """
-    p, t = owner.params, owner.timing
-    units, bits, costs, loop = p.per_round, p.left_loop_bits, owner._costs, t.loop
-    assert t.left_reference == loop - 2 and t.left_lu == loop + 3
-
-    def less(a, b):
-        return _less(a, b, bits)
-
-    def lane_registers(name, shape=bits):
-        return [Signal(shape, name=f"{name}{i}", reset_less=True) for i in range(units)]
-
-    def odd_at(offset):
-        value = owner.tag.x[0] if SGM_LEFT_P1_PARITY else ~owner.tag.x[0]
-        return owner._aligned(value, 0, offset, "sgm_left_odd")
-
-    def even_at(offset):
-        return owner._valid_at(offset) & ~odd_at(offset)
-
-    def lanes_at(flag, offset, name):
-        """A flag (a function of the offset) slot-aligned at ``offset``, a copy per group
-        of lanes."""
-        return owner._lane_copies(m, flag(offset - 1), offset - 1, offset, name)
-
-    # The clock before the loop's comparisons (``loop`` - 1): ref + P2 holds Q(x); C(x - 1)
-    # and Q(x - 1) are the last position's, kept across gaps.
-    before = loop - 1
-    valid = owner._valid_at(before)
-    last_costs = [_last_position(m, c, valid, f"sgm_left_last_cost{i}")
-                  for i, c in enumerate(costs[before])]
-    last_q = _last_position(m, reference[0], valid, "sgm_left_last_q")
-    fresh = lanes_at(fresh_at, before, "sgm_left_pair_fresh")
-    # Lu(x - 2) and Lu(x - 2) + P1 (the loop's state), S and S + P1, Q(x) - C(x - 1).
-    state, state_plus = lane_registers("sgm_left_even"), lane_registers("sgm_left_even_plus")
-    pair, pair_plus = lane_registers("sgm_left_pair_sum"), lane_registers("sgm_left_pair_plus")
-    late_q = lane_registers("sgm_left_late_q")
-    costs_plus = [register(m, c + p.p1, p.cost_bits + 1, f"sgm_left_cost_plus{i}")
-                  for i, c in enumerate(costs[before - 1])]
-    even_lanes = lanes_at(even_at, before, "sgm_left_even_write")
-    for i in range(units):
-        here, held = costs[before][i], Mux(fresh[i], 0, last_costs[i])
-        # A fresh start: S = C(x), and Q(x) - C(x - 1) = 0 wins (below).
-        with m.If(even_lanes[i]):
-            m.d.sync += [pair[i].eq(held + here), pair_plus[i].eq(held + costs_plus[i]),
-                         late_q[i].eq(Mux(fresh[i], 0, reference[i] - last_costs[i]))]
-    # Q of the last odd column, for its own choice and for the even column after it.
-    odd_q = _copies(m, last_q, bits, units, "sgm_left_odd_q",
-                    owner._valid_at(loop) & odd_at(loop))
-
-    # The comparisons among Lu(x - 2, d), Lu(x - 2, d -+ 1) + P1 and Q(x - 1), every clock;
-    # outside 0 .. D-1 the lane itself stands in (Lu(d) + P1 never beats Lu(d)).
-    neighbours = [state_plus[0], *state_plus, state_plus[units - 1]]
-    fresh_loop = lanes_at(fresh_at, loop, "sgm_left_loop_fresh")
-    candidates, beats = [], []
-    for i in range(units):
-        four = [state[i], neighbours[i], neighbours[i + 2], odd_q[i]]
-        among, _ = _minimum(four, bits)
-        among = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
-                 for key, b in among.items()}
-        # ... and Q(x) - C(x - 1) against them, in the loop's clock (always at a fresh start).
-        late = {(4, k): register(m, less(late_q[i], c) | fresh_loop[i], 1,
-                                 f"sgm_left_beats{i}_4{k}") for k, c in enumerate(four)}
-        candidates.append(four + [late_q[i]])
-        beats.append({**among, **late})
-
-    # The choices: the even column's over five (the loop), an odd column's over four.
-    write = lanes_at(even_at, loop + 1, "sgm_left_state_write")
-    odd_out = lanes_at(odd_at, loop + 2, "sgm_left_odd_out")
-    lu = []
-    for i in range(units):
-        _, choose = _minimum(candidates[i], bits)
-        best = choose(beats[i])
-        with m.If(write[i]):
-            m.d.sync += [state[i].eq((pair[i] + best)[:bits]),
-                         state_plus[i].eq((pair_plus[i] + best)[:bits])]
-        _, choose = _minimum(candidates[i][:4], bits)
-        odd = (costs[loop + 2][i] + choose(beats[i]))[:bits]
-        lu.append(register(m, Mux(odd_out[i], odd, state[i]), bits, f"sgm_left_lu{i}"))
-    return lu
-
-
-def _last_position(m, value, valid, name):
-    """``value`` of the last slot with a position (``valid`` set), a clock later: what the
-    loop over two positions keeps of x - 1 across the gaps before x."""
-    return register(m, value, len(value), name, valid)
