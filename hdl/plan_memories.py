@@ -16,7 +16,8 @@ from .common import delay_line_rings, lane_groups, tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, row_banks, store_slices,
                              vertical_bits, window_rows)
-from .plan_timing import core_timing, lr_timing, sgm_delays, sgm_left_pairs
+from .plan_timing import core_timing, lr_timing, sgm_delays, sgm_left_pairs, \
+    sgm_left_shift_store
 from .trees import DEFAULT_EVERY
 
 __all__ = ["MemoryUse", "memories", "memory_bits", "sgm_memories", "built_memories",
@@ -140,10 +141,9 @@ def sgm_memories(params, every=DEFAULT_EVERY):
     top and top-left in one memory (both read the position's own column), top-right in
     another (it reads the next column); the three paths' minima, one word per column.
     LUT RAM (R > 1; registers at R = 1): the top-left words held for the next position, and
-    from R = 3 (registers below, where the loop spans two positions,
-    ``plan_timing.sgm_left_pairs``) the left path's Lu(x - 1, .) and Lu(x - 1, .) + P1
-    (2 D/R values of ``left_loop_bits`` per round) and the first of them + P1 again (the
-    neighbour across the next round's edge). With the fifth path
+    from R = 3 (registers below, ``plan_timing.sgm_left_shift_store``, ``sgm_left_pairs``) the left
+    path's Lu(x - 1, .) and Lu(x - 1, .) + P1 (2 D/R values of ``left_loop_bits`` per
+    round) and the first of them + P1 again (the neighbour across the next round's edge). With the fifth path
     (:mod:`.sgm_right`) its recursion's two stores again, and three rows of W R words in
     block RAM: the costs (and P2), S4 and S5.
     """
@@ -156,7 +156,7 @@ def sgm_memories(params, every=DEFAULT_EVERY):
     # The left path's and the top-left stores: one LUT RAM per group of lanes
     # (common.LaneStores).
     sizes = Counter(len(group) for group in lane_groups(p.per_round))
-    if not sgm_left_pairs(p.rounds):
+    if not sgm_left_shift_store(p.rounds) and not sgm_left_pairs(p.rounds):
         # The fifth path's recursion has the left path's stores again.
         copies = 2 if p.fifth_path else 1
         result += [MemoryUse("left path store", copies * count, p.rounds,

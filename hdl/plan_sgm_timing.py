@@ -11,7 +11,7 @@ from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS", "sgm_row_clocks", "SGM_ABOVE_EVERY",
            "SGM_LEFT_LEAD", "sgm_left_pairs", "sgm_left_stages", "sgm_left_firsts_registered",
-           "sgm_tree_clocks", "SgmTiming", "sgm_timing", "sgm_delays",
+           "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "sgm_delays",
            "FifthTiming", "sgm_fifth_timing"]
 
 
@@ -54,32 +54,28 @@ SGM_LEFT_LEAD = 6
 
 
 def sgm_left_pairs(rounds):
-    """Whether the left path's loop spans two positions (R <= 2): with the small step only
+    """Whether the left path's loop spans two positions (R = 1): with the small step only
     into odd columns (``params.SGM_LEFT_P1_PARITY``) Lu(x) of an even column is one minimum
     over Lu(x - 2, .) and the two references, compared in one clock and chosen and added
     in the next, while an odd column's Lu comes from the same comparisons outside the loop.
-    A loop over one position has R - 1 clocks (the neighbour across a round's upper edge
-    is written a clock after the round): one clock (its comparison, choice and addition in
-    series) at R = 1 was 81.8 MHz on ECP5 (docs/sgm/lane_loop_probe.py), at R = 2 census
-    5x5 SGM's critical path at 1280 x 720, D = 64 (14.13 ns, 70.8 MHz). The loop over two
-    positions has two clocks at R = 1 (149.7 MHz, the probe's ``pairs`` style) and three
-    at R = 2 (a word of the state read into registers, then compared, then chosen)."""
-    return rounds <= 2
+    One position per clock leaves a one-position loop one clock (its comparison, choice and
+    addition in series: 81.8 MHz on ECP5, docs/sgm/lane_loop_probe.py); the two-position
+    loop two (149.7 MHz, its ``pairs`` style)."""
+    return rounds == 1
 
 
 def sgm_left_stages(rounds):
-    """Clocks from the left path's loop (its comparisons) to Lu in a register. Over one
-    position, round j + 1 of x - 1 is written R - 1 clocks before round j of x reads it,
-    so the update may take up to R - 1 clocks: the comparisons registered at R = 3; from
+    """Clocks of the left path's lane update: round j + 1 of x - 1 is written R - 1 clocks
+    before round j of x reads it, so the update may take up to R - 1 clocks. One clock
+    (comparisons, choice and addition) at R = 2; the comparisons registered at R = 3; from
     R = 4 the choice registered as well, so that each clock holds one carry chain or one
     multiplexer (the choice and the 11-bit addition were 9.6 ns in one clock,
-    docs/sgm/lane_loop_probe.py). Over two positions (:func:`sgm_left_pairs`) an odd
-    column compares a clock after its slot at R = 1 (Lu of the even column before it is
-    written then) and two clocks after at R = 2 (its first lane of round j + 1 then), then
-    chooses and adds: three clocks, and four at R = 2."""
+    docs/sgm/lane_loop_probe.py). At R = 1 (:func:`sgm_left_pairs`) Lu is there three
+    clocks after the loop's read: an odd column compares a clock after its slot (Lu of
+    the even column before it is written then), then chooses and adds."""
     if sgm_left_pairs(rounds):
-        return 2 + rounds
-    return min(rounds - 1, 3)
+        return 3
+    return min(max(rounds - 1, 1), 3)
 
 
 def sgm_left_firsts_registered(rounds):
@@ -88,8 +84,23 @@ def sgm_left_firsts_registered(rounds):
     x - 1, written in clock T - R + j + stages (one later than round j), so the early read
     needs stages + 1 <= R - 1. At R = 3, 4 (stages + 1 = R) the word is written in the
     clock before the read whenever the slot before held a position: the stage then takes
-    it from the write's own register instead."""
-    return sgm_left_stages(rounds) + 1 <= rounds - 1
+    it from the write's register instead."""
+    return not sgm_left_shift_store(rounds) and sgm_left_stages(rounds) + 1 <= rounds - 1
+
+
+def sgm_left_shift_store(rounds):
+    """The left path's store in shifting registers (:class:`~.common.ShiftStore`) where its
+    update takes one clock (R <= 2): Lu(x, round j) is then written in the clock that reads
+    Lu(x - 1, round j), always the R-th write before, so the read is one register. In LUT
+    RAM at R = 2 the read address, the RAM's read, + P1, the comparisons, the choice and
+    the addition in one clock were census 5x5 SGM's critical path at 640 x 480, D = 64
+    (19.1 ns, 14 levels, 52.4 MHz). From R = 3 the update's clocks would move the word read
+    with the gaps between positions, and R words of LUT RAM cost less than R words of
+    flip-flops; there Lu(x - 1, round j), written in clock T - R + j + stages - 1 for the
+    read of round j of x in clock T + j, is there two clocks early (stages + 1 <= R), and
+    the LUT RAM is read a clock early into a register. At R = 1 the loop's state is Lu of
+    the last even column, one register per lane (:func:`sgm_left_pairs`)."""
+    return rounds == 2
 
 
 def sgm_tree_clocks(units):

@@ -43,8 +43,9 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 from amaranth.hdl import Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_LEFT_P1_PARITY, SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .common import LaneStores, Store, bits_for, delay_line, register, replica, split_lanes
-from .plan_timing import sgm_delays, sgm_left_firsts_registered
+from .common import (LaneStores, ShiftStore, Store, bits_for, delay_line, register, replica,
+                     split_lanes)
+from .plan_timing import sgm_delays, sgm_left_firsts_registered, sgm_left_shift_store
 from .sgm_left_choice import copies, less, minimum
 from .sgm_left_pairs import pair_update
 from .sgm_left_reference import pick_references as _picks, reference_sum
@@ -201,7 +202,7 @@ def left_path(owner, m, fresh, p2):
 
 def _lane_update(owner, m, reference, fresh_at, column):
     """Lu(x, .) per lane in a register at ``timing.left_lu`` from a loop over one position
-    (R >= 3; module docstring): round j of x reads Lu(x - 1, round j) at ``loop`` + j."""
+    (R >= 2; module docstring): round j of x reads Lu(x - 1, round j) at ``loop`` + j."""
     p, t, slots = owner.params, owner.timing, owner._slots
     units, rounds, bits, costs, loop = p.per_round, p.rounds, p.left_loop_bits, owner._costs, \
         t.loop
@@ -212,19 +213,24 @@ def _lane_update(owner, m, reference, fresh_at, column):
     # A word holds Lu and Lu + P1 of every lane (the + P1 added beside Lu, outside the
     # loop's path: the word's read, + P1 and the comparisons were census 7x7 SGM's
     # critical path at R = 10, 6.70 ns, nine levels).
-    # LUT RAM read a clock early into a register: Lu(x - 1, round j) was written in clock
-    # T - R + j + stages - 1 <= T + j - 2. The round counter, the LUT RAM's read and + P1
-    # in front of the comparisons were census 7x7 SGM's critical path at R = 10 (9.44 ns,
-    # 106 MHz), the read, + P1 and the comparisons census 5x5 SGM's at 1280 x 720, D = 64,
-    # R = 4 (10.76 ns, 92.9 MHz).
-    # One LUT RAM per few lanes, each read at a round counter of its own (round loop - 1
-    # is round loop - 2 a clock later): one counter into every lane's read address
-    # recurred in census 7x7 SGM's placements at R = 10 (13-14 endpoints, wire only).
-    store = LaneStores(m, "sgm_left_store", units, bits, rounds, sections=2)
-    word = register(m, store.read(lambda k: replica(m, slots.round(loop - 2),
-                                                    f"sgm_left_read_round{k}",
-                                                    reset_less=True)),
-                    2 * units * bits, "sgm_left_word")
+    shifting = sgm_left_shift_store(rounds)
+    if shifting:
+        store = ShiftStore(m, "sgm_left_store", unsigned(2 * units * bits), rounds)
+        word = store.oldest
+    else:
+        # LUT RAM read a clock early into a register: Lu(x - 1, round j) was written in
+        # clock T - R + j + stages - 1 <= T + j - 2 (R >= 3). The round counter, the LUT
+        # RAM's read and + P1 in front of the comparisons were census 7x7 SGM's critical
+        # path at R = 10 (9.44 ns, 106 MHz), the read, + P1 and the comparisons census 5x5
+        # SGM's at 1280 x 720, D = 64, R = 4 (10.76 ns, 92.9 MHz).
+        # One LUT RAM per few lanes, each read at a round counter of its own (round loop - 1
+        # is round loop - 2 a clock later): one counter into every lane's read address
+        # recurred in census 7x7 SGM's placements at R = 10 (13-14 endpoints, wire only).
+        store = LaneStores(m, "sgm_left_store", units, bits, rounds, sections=2)
+        word = register(m, store.read(lambda k: replica(m, slots.round(loop - 2),
+                                                        f"sgm_left_read_round{k}",
+                                                        reset_less=True)),
+                        2 * units * bits, "sgm_left_word")
     centre, plus = split_lanes(word, units, bits), split_lanes(word[units * bits:], units, bits)
     # The neighbours across the round's edges, + P1: the last lane of the word read a clock
     # ago (round j - 1 of x - 1), the first lane of word j + 1 (a store of its own, which
@@ -233,23 +239,34 @@ def _lane_update(owner, m, reference, fresh_at, column):
     # the counter, the store's read and the comparisons in one clock were census 7x7 SGM's
     # critical path at R = 10 (10.6 ns).
     before = register(m, plus[units - 1], bits, "sgm_left_before")
-    first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
-    last_round = register(m, slots.round(loop - 1) == rounds - 1, 1, "sgm_left_last_round")
-    # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before:
-    # the round counter two clocks earlier reads j + 1 (mod R) a clock before round j.
-    firsts = Store(m, "sgm_left_firsts", unsigned(bits), rounds)
-    following = register(m, firsts.read(slots.round(loop - 2)), bits, "sgm_left_following")
-    just_written = None
-    if not sgm_left_firsts_registered(rounds):
-        # R = 3, 4: the word is written in the clock before its read when the slot before
-        # held a position, and a clock too late for the early read; it is then taken from
-        # the write's own register. Read through the LUT RAM at the round counter, it was
-        # census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4 (9.83 ns, 101.8 MHz).
-        just_written = Signal(bits, name="sgm_left_just_written", reset_less=True)
-        just_valid = Signal(name="sgm_left_just_valid")
-        following = Mux(just_valid, just_written, following)
-    below = Mux(first_round, plus[0], before)
-    above = Mux(last_round, plus[units - 1], following)
+    firsts = None
+    if rounds > 1:
+        first_round = register(m, slots.round(loop - 1) == 0, 1, "sgm_left_first_round")
+        last_round = register(m, slots.round(loop - 1) == rounds - 1, 1,
+                              "sgm_left_last_round")
+        # Round j reads the first lane of round j + 1 of x - 1, written R - 1 writes before.
+        firsts = ShiftStore(m, "sgm_left_firsts", unsigned(bits), rounds - 1) if shifting \
+            else Store(m, "sgm_left_firsts", unsigned(bits), rounds)
+        # The round counter two clocks earlier reads j + 1 (mod R) a clock before round j.
+        just_written = None
+        if shifting:
+            following = firsts.oldest
+        else:
+            following = register(m, firsts.read(slots.round(loop - 2)), bits,
+                                 "sgm_left_following")
+        if not shifting and not sgm_left_firsts_registered(rounds):
+            # R = 3, 4: the word is written in the clock before its read when the slot
+            # before held a position, and a clock too late for the early read; it is then
+            # taken from the write's own register. Read through the LUT RAM at the round
+            # counter, it was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4
+            # (9.83 ns, 101.8 MHz).
+            just_written = Signal(bits, name="sgm_left_just_written", reset_less=True)
+            just_valid = Signal(name="sgm_left_just_valid")
+            following = Mux(just_valid, just_written, following)
+        below = Mux(first_round, plus[0], before)
+        above = Mux(last_round, plus[units - 1], following)
+    else:
+        below, above = plus[0], plus[units - 1]
     neighbours = [below, *plus, above]
     last = loop + t.left_stages - 1           # the clock that writes Lu(x, round j)
     # With the choice registered, a fresh start zeroes that register (its flip-flops'
@@ -261,13 +278,14 @@ def _lane_update(owner, m, reference, fresh_at, column):
     lanes = []
     for i in range(units):
         candidates = [centre[i], neighbours[i], neighbours[i + 2], reference[i]]
-        beats, _ = minimum(candidates, bits, small[i])
-        # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
-        candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
-                      for k, c in enumerate(candidates)]
-        beats = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
-                 for key, b in beats.items()}
-        _, choose = minimum(candidates, bits)
+        beats, choose = minimum(candidates, bits, small[i])
+        if t.left_stages >= 2:
+            # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
+            candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
+                          for k, c in enumerate(candidates)]
+            beats = {key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
+                     for key, b in beats.items()}
+            _, choose = minimum(candidates, bits)
         best = choose(beats)
         if fresh_chosen is not None:
             # Then add: R - 1 >= 3 clocks to spare.
@@ -282,8 +300,9 @@ def _lane_update(owner, m, reference, fresh_at, column):
                   for i, c in enumerate(costs[last - 1])]
     new_plus = [(c + best)[:bits] for c, best in zip(costs_plus, lanes)]
     store.write(slots.round(last), Cat(*new, *new_plus), owner._valid_at(last))
-    first = new_plus[0]
-    firsts.write(slots.round(last), first, owner._valid_at(last))
-    if just_written is not None:
-        m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
+    if firsts is not None:
+        first = new_plus[0]
+        firsts.write(slots.round(last), first, owner._valid_at(last))
+        if just_written is not None:
+            m.d.sync += [just_written.eq(first), just_valid.eq(owner._valid_at(last))]
     return [register(m, v, bits, f"sgm_left_lu{i}") for i, v in enumerate(new)]
