@@ -183,6 +183,23 @@ def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
                        "iterations, none fewer than 19 since iteration 41")
 
 
+@pytest.mark.parametrize("finish_seconds, expected", [
+    (30 * 60, None),
+    (0, "timing-driven rip-up abandoned: 19 arcs missed the clock after 400 iterations, "
+        "none fewer than 19 since iteration 41")])
+def test_stalled_legal_ripup_runs_to_its_end_in_time(tmp_path, monkeypatch, finish_seconds,
+                                                     expected):
+    """Stalled with no wire overused, as above: left to reach nextpnr's last rip-up
+    iteration (it then keeps its route) when its pace gets it there within
+    ``_RIPUP_FINISH_SECONDS``, stopped when not."""
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    monkeypatch.setattr(nextpnr, "_RIPUP_FINISH_SECONDS", finish_seconds)
+    failure = processes.run_tool(_router_script(400, lambda i: max(19, 60 - i), 0.5), tmp_path,
+                                 None, "out.log",
+                                 watch=nextpnr._RipupWatch(tmp_path / "nextpnr.log", None))
+    assert failure == expected
+
+
 @pytest.mark.parametrize("iterations, failing", [
     (99, 4000),                              # early
     (29, 6860),                              # early, far from the clock
@@ -236,7 +253,7 @@ _STALLED = ("timing-driven rip-up abandoned: 2 arcs missed the clock after 241 i
             "none fewer than 2 since iteration 36")
 
 
-def _abandon_at_once(log_path):
+def _abandon_at_once(log_path, finishes=None):
     """A stand-in for the rip-up's watch: the real nextpnr routes, and its rip-up is
     abandoned as soon as it has started its log."""
     return _STALLED if Path(log_path).exists() else None

@@ -34,14 +34,44 @@ _RIPUP_FAILING_ARCS = 500
 _RIPUP_EARLY_ITERATIONS = 30
 _RIPUP_EARLY_FAILING_ARCS = 5000
 _RIPUP_PATIENCE = 200
+#: nextpnr 0.11's router2 re-routes the arcs that miss the clock up to this iteration, then
+#: ends with the legal route it has. A stalled route with no wire overused is left to get
+#: there when, at its pace so far, it does so within ``_RIPUP_FINISH_SECONDS`` and before
+#: the deadline: the plain route from scratch that replaces an abandoned one can be far
+#: worse (census 7x7 SGM at R = 10, one placement: 122-173 arcs short of 150 MHz for 200
+#: iterations, then 115.6 MHz routed plainly).
+_RIPUP_LAST_ITERATION = 1500
+_RIPUP_FINISH_SECONDS = 30 * 60
 _HOPELESS = "timing-driven rip-up abandoned"
 _ITERATION = re.compile(rb"iter=(\d+) .*overused=(\d+) .*tmgfail=(\d+)")
 
 
-def _hopeless_ripup(log_path):
+class _RipupWatch:
+    """For :func:`~.processes.run_tool`'s ``watch``: :func:`_hopeless_ripup` with the pace
+    of the route so far (seconds per iteration since the watch was made) and ``deadline``
+    (a ``time.monotonic()`` value or None)."""
+
+    def __init__(self, log_path, deadline):
+        self.log_path, self.deadline, self.started = log_path, deadline, time.monotonic()
+
+    def __call__(self):
+        return _hopeless_ripup(self.log_path, self._finishes)
+
+    def _finishes(self, iteration):
+        """Whether the rip-up reaches :data:`_RIPUP_LAST_ITERATION` in time from
+        ``iteration``, at its pace so far with half of it again to spare."""
+        now = time.monotonic()
+        left = 1.5 * (now - self.started) / iteration * (_RIPUP_LAST_ITERATION - iteration)
+        return (left <= _RIPUP_FINISH_SECONDS
+                and (self.deadline is None or now + left < self.deadline))
+
+
+def _hopeless_ripup(log_path, finishes=lambda iteration: False):
     """For :func:`~.processes.run_tool`'s ``watch``: a reason to stop nextpnr's
     timing-driven rip-up, or None (see :data:`_RIPUP_ITERATIONS`,
-    :data:`_RIPUP_EARLY_ITERATIONS`, :data:`_RIPUP_PATIENCE`)."""
+    :data:`_RIPUP_EARLY_ITERATIONS`, :data:`_RIPUP_PATIENCE`). ``finishes(iteration)``:
+    whether a stalled legal route would get to nextpnr's last rip-up iteration in time
+    (:data:`_RIPUP_LAST_ITERATION`; it then runs on)."""
     try:
         with open(log_path, "rb") as log:
             matches = _ITERATION.findall(log.read())
@@ -57,7 +87,8 @@ def _hopeless_ripup(log_path):
                 f"iterations")
     fewest = min(arcs for _, _, arcs in history)
     reached = next(i for i, _, arcs in history if arcs == fewest)
-    if failing and not overused and iteration - reached >= _RIPUP_PATIENCE:
+    if (failing and not overused and iteration - reached >= _RIPUP_PATIENCE
+            and not finishes(iteration)):
         return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
                 f"iterations, none fewer than {fewest:,} since iteration {reached}")
     return None
@@ -164,7 +195,7 @@ def _place_and_route_once(result, build, part, freq, deadline, seeded, constrain
     route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
                        f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
     failure = run_tool(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",
-                       watch=lambda: _hopeless_ripup(build / "nextpnr.log"))
+                       watch=_RipupWatch(build / "nextpnr.log", deadline))
     result["router"], result["ripup_abandoned"] = "router2, timing-driven rip-up", None
     if failure is not None and failure.startswith(_HOPELESS):
         result["router"], result["ripup_abandoned"] = "router2", failure
