@@ -42,11 +42,11 @@ m(x - 1), the exact minimum over D of the previous position, is there.
 
 from amaranth.hdl import Cat, Const, Mux, Signal, unsigned
 
-from ..params import SGM_LEFT_P1_PARITY, SGM_TRACK_AGE, SGM_TRACK_STEPS
+from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import (LaneStores, ShiftStore, Store, bits_for, delay_line, register, replica,
                      split_lanes)
 from .plan_timing import sgm_delays, sgm_left_firsts_registered, sgm_left_shift_store
-from .sgm_left_choice import copies, less, minimum
+from .sgm_left_choice import copies, less, minimum, small_step
 from .sgm_left_pairs import pair_update
 from .sgm_left_reference import pick_references as _picks, reference_sum
 from .trees import build_min_tree
@@ -206,9 +206,7 @@ def _lane_update(owner, m, reference, fresh_at, column):
     p, t, slots = owner.params, owner.timing, owner._slots
     units, rounds, bits, costs, loop = p.per_round, p.rounds, p.left_loop_bits, owner._costs, \
         t.loop
-    # The small step only into the columns of SGM_LEFT_P1_PARITY (docs/semantics.md).
-    parity = owner.tag.x[0] if SGM_LEFT_P1_PARITY else ~owner.tag.x[0]
-    small = owner._lane_copies(m, parity, 0, loop, "sgm_left_small")
+    small = owner._lane_copies(m, small_step(owner.tag.x), 0, loop, "sgm_left_small")
     # The loop: Lu(x - 1, .) of round j from the store at ``loop`` + j.
     # A word holds Lu and Lu + P1 of every lane (the + P1 added beside Lu, outside the
     # loop's path: the word's read, + P1 and the comparisons were census 7x7 SGM's

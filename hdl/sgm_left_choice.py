@@ -1,13 +1,20 @@
 """The left path's lane arithmetic, shared by its loop over one position
-(:mod:`.sgm_left`) and over two (:mod:`.sgm_left_pairs`): comparisons of values kept
-modulo 2^n, the minimum of a few candidates as comparisons then a one-hot choice, and
-copies of a scalar per group of lanes."""
+(:mod:`.sgm_left`) and over two (:mod:`.sgm_left_pairs`): which columns take the small
+step, comparisons of values kept modulo 2^n, the minimum of a few candidates as
+comparisons then a one-hot choice, and copies of a scalar per group of lanes."""
 
 from amaranth.hdl import Const, Mux
 
+from ..params import SGM_LEFT_P1_PARITY
 from .common import replica
 
-__all__ = ["less", "minimum", "LANES_PER_COPY", "copies"]
+__all__ = ["small_step", "less", "minimum", "LANES_PER_COPY", "copies"]
+
+
+def small_step(x):
+    """Whether column ``x`` takes the small step (P1) from its neighbours: the columns of
+    ``params.SGM_LEFT_P1_PARITY`` (docs/semantics.md, "The left path")."""
+    return x[0] if SGM_LEFT_P1_PARITY else ~x[0]
 
 
 def less(a, b, bits):

@@ -15,9 +15,8 @@ only in slots with a position (gaps hold it).
 
 from amaranth.hdl import Mux, Signal
 
-from ..params import SGM_LEFT_P1_PARITY
 from .common import register
-from .sgm_left_choice import copies, less, minimum
+from .sgm_left_choice import copies, less, minimum, small_step
 
 __all__ = ["pair_update"]
 
@@ -31,8 +30,7 @@ class _Columns:
 
     def odd_at(self, offset):
         """Whether the slot at ``offset`` is a column with the small step (slot-aligned)."""
-        x = self.owner.tag.x[0]
-        return self.owner._aligned(x if SGM_LEFT_P1_PARITY else ~x, 0, offset, "sgm_left_odd")
+        return self.owner._aligned(small_step(self.owner.tag.x), 0, offset, "sgm_left_odd")
 
     def even_at(self, offset):
         """A position without the small step in the slot at ``offset``."""
@@ -74,9 +72,6 @@ def pair_update(owner, m, reference, fresh_at, column):
     state, state_plus = cols.lane_registers("sgm_left_even"), \
         cols.lane_registers("sgm_left_even_plus")
 
-    def again(values, name):
-        return [register(m, v, len(v), f"{name}{i}") for i, v in enumerate(values)]
-
     # In the clock before the comparisons (``loop`` - 1), ref + P2 holds Q(x); C(x - 1) is
     # the last position's (kept across gaps).
     before = loop - 1
@@ -113,7 +108,7 @@ def pair_update(owner, m, reference, fresh_at, column):
         lane.update({(4, k): register(m, less(late_q[i], c, bits) | fresh_loop[i], 1,
                                       f"sgm_left_beats{i}_4{k}") for k, c in enumerate(four)})
         beats.append(lane)
-    late_q = again(late_q, "sgm_left_late_q_choice")
+    late_q = [register(m, v, bits, f"sgm_left_late_q_choice{i}") for i, v in enumerate(late_q)]
 
     # The even column's choice among five and + S (the loop); the state holds the four
     # candidates through both columns' choices.
