@@ -93,6 +93,10 @@ def track_centre(m, stage, slots, admit, start, *, shifted, large_window):
     live = Signal(name="centre_live")
     countdown = Signal(range(tag_lag + 1))    # positions until the tag's switch
     line_end = Signal(name="centre_line_end")              # x == W - 1
+    # line_end & window_room, set with line_end: the row step's case one flag instead of
+    # two (the row flags' step was four LUTs deep, census 5x5 box at 1280 x 720, R = 1:
+    # 7.68 ns from the step's start flag through window_y_room to prev_ok3).
+    line_end_room = Signal(name="centre_line_end_room")
     y_room, window_room = Signal(name="y_room"), Signal(name="window_y_room")
     switch_window = Signal(name="switch_window")           # countdown == window event
     switch_tag = Signal(name="switch_tag")                 # countdown == 1
@@ -196,7 +200,7 @@ def track_centre(m, stage, slots, admit, start, *, shifted, large_window):
         return ~jump(start, overlap)
 
     def row_step(start, overlap):
-        return advance(start, overlap) & line_end & window_room
+        return advance(start, overlap) & line_end_room
 
     def switching(start, overlap):
         return advance(start, overlap) & switch_window
@@ -206,6 +210,7 @@ def track_centre(m, stage, slots, admit, start, *, shifted, large_window):
         for copy, group in enumerate(("columns", "counters", "flags", "control")))
     jump_columns = when(columns, jump, "jump_columns")
     advance_columns = when(columns, advance, "advance_columns")
+    switch_columns = when(columns, switching, "switch_columns")
     jump_counters = when(counters, jump, "jump_counters")
     row_step_counters = when(counters, row_step, "row_step_counters")
     switch_counters = when(counters, switching, "switch_counters")
@@ -220,7 +225,8 @@ def track_centre(m, stage, slots, admit, start, *, shifted, large_window):
     # The previous frame is finished: jump to the new frame's coordinates. The rows'
     # flags follow at once: the first line end may be the next step.
     with m.If(jump_columns):
-        m.d.sync += [x.eq(first_x), line_end.eq(first_x == width - 1)]
+        m.d.sync += [x.eq(first_x), line_end.eq(first_x == width - 1),
+                     line_end_room.eq(first_x == width - 1 and first_y < highest)]
         m.d.sync += columns_at(first_x)
     with m.If(jump_counters):
         m.d.sync += [y.eq(first_y), window_y.eq(first_y), live.eq(1),
@@ -228,8 +234,12 @@ def track_centre(m, stage, slots, admit, start, *, shifted, large_window):
     with m.If(jump_flags):
         m.d.sync += rows_at(first_y)
     with m.If(advance_columns):
+        # window_room holds until the line end (rows change only there, W > 2 steps
+        # apart) unless this step switches the window to row 0.
+        room = Mux(switch_columns, int(0 < highest), window_room)
         m.d.sync += [x.eq(Mux(line_end, 0, x + 1)),
-                     line_end.eq(~line_end & (x == width - 2))]
+                     line_end.eq(~line_end & (x == width - 2)),
+                     line_end_room.eq(~line_end & (x == width - 2) & room)]
         with m.If(line_end):
             m.d.sync += columns_at(0)
         with m.Else():
