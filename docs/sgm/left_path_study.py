@@ -48,9 +48,10 @@ from npstereo.golden.synthetic import synthetic_pair
 from npstereo.params import (SGM_LEFT_P1_PARITY, SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS,
                              StereoParams)
 
-#: (name, step s, kind, J, K[, parity]) of every variant measured; with a parity, the steps
-#: into the columns x with x % 2 == parity take no P1 transition (stay or the large step):
-#: the loop then closes over two positions (docs/sgm.md, "Two clocks at R = 1").
+#: (name, step s, kind, J, K[, (period, phase)]) of every variant measured; with a period,
+#: only the steps into the columns x with x % period == phase take the P1 transitions (the
+#: others stay or take the large step): with period 2 the loop closes over two positions
+#: (docs/sgm.md, "Two clocks at R = 1").
 VARIANTS = [("exact", 1, "exact", 0, 0),
             ("stale 8", 1, "stale", 0, 8), ("stale 12", 1, "stale", 0, 12),
             ("comp 2", 1, "comp", 0, 2), ("comp 4", 1, "comp", 0, 4),
@@ -59,16 +60,16 @@ VARIANTS = [("exact", 1, "exact", 0, 0),
             ("track 3 12", 1, "track", 3, 12), ("track 4 16", 1, "track", 4, 16),
             ("step 2, exact", 2, "exact", 0, 0), ("step 2, track 2 6", 2, "track", 2, 6),
             ("step 3, exact", 3, "exact", 0, 0),
-            ("track 4 16, P1 into odd columns", 1, "track", 4, 16, 0),
-            ("track 4 16, P1 into even columns", 1, "track", 4, 16, 1),
-            ("track 8 32, P1 into odd columns", 1, "track", 8, 32, 0)]
+            ("track 4 16, P1 into odd columns", 1, "track", 4, 16, (2, 1)),
+            ("track 4 16, P1 into even columns", 1, "track", 4, 16, (2, 0)),
+            ("track 8 32, P1 into odd columns", 1, "track", 8, 32, (2, 1))]
 #: (transform, block, P1, P2, adaptive-P2 exponent): the default and census 5x5's best.
 CONFIGS = [("census", 7, 24, 79, 5), ("census", 5, 16, 96, 4)]
 NOISE = (0.0, 2e-4, 2e-3)
 SEEDS = (0, 1, 2)
 
 
-def left_path(volume, p1, p2_map, step, kind, j, k, parity=None):
+def left_path(volume, p1, p2_map, step, kind, j, k, p1_columns=None):
     """(L of the left path (H, W, D) int64, largest Lu(x, d) - min_d Lu(x, d))."""
     costs = volume.astype(np.int64).transpose(1, 0, 2)          # (W, H, D)
     width, height, _ = costs.shape
@@ -83,7 +84,7 @@ def left_path(volume, p1, p2_map, step, kind, j, k, parity=None):
     for x in range(step, width):
         previous = path[x - step]
         candidates = previous.copy()
-        if parity is None or x % 2 != parity:
+        if p1_columns is None or x % p1_columns[0] == p1_columns[1]:
             candidates[:, 1:] = np.minimum(candidates[:, 1:], previous[:, :-1] + p1)
             candidates[:, :-1] = np.minimum(candidates[:, :-1], previous[:, 1:] + p1)
         first = x % step                                        # this step's first column
@@ -110,18 +111,18 @@ def left_path(volume, p1, p2_map, step, kind, j, k, parity=None):
 def score(left, right, truth, disparities, config, variant):
     transform, block, p1, p2, adapt = config
     _, step, kind, j, k = variant[:5]
-    parity = variant[5] if len(variant) > 5 else None
+    p1_columns = variant[5] if len(variant) > 5 else None
     params = StereoParams(transform=transform, block=block, disparities=disparities)
     volume = sgm.cost_volume(left, right, params)
     rows = sum(sgm.path_costs(volume, path, p1, p2, guide=left, adapt=adapt,
                               max_cost=params.max_cost).astype(np.int64)
                for path in SGM_ROW_PATHS)
     left_costs, spread = left_path(volume, p1, sgm.path_p2(left, "left", p1, p2, adapt),
-                                   step, kind, j, k, parity)
+                                   step, kind, j, k, p1_columns)
     summed = rows + left_costs
-    # The golden model's left path: no P1 into the columns of the other parity.
-    golden_left = (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, 1 - SGM_LEFT_P1_PARITY)
-    if (step, kind, j, k, parity) == golden_left:
+    # The golden model's left path: P1 into the columns of its parity only.
+    golden_left = (1, "track", SGM_TRACK_STEPS, SGM_TRACK_AGE, (2, SGM_LEFT_P1_PARITY))
+    if (step, kind, j, k, p1_columns) == golden_left:
         golden = sgm.aggregate(volume, p1, p2, guide=left, adapt=adapt,
                                max_cost=params.max_cost)
         assert np.array_equal(summed, golden), f"{variant[0]} must be golden/sgm.py"
