@@ -254,10 +254,10 @@ class CoreTiming:
 
 
 #: Clocks a credit is away after ``CoreTiming.output``: the word's register into the output
-#: queue, the queue's two (SyncFIFOBuffered), then the returned credit's register, the
+#: queue, the queue's two (SyncFIFOBuffered), then the returned credit's two registers, the
 #: counter and its room flag (hdl/core.py). Left out of the queue's depth, a steady stream
 #: at R = 1 waited for credits (3 clocks in 67, census 3x3 SGM with the fifth path).
-CREDIT_RETURN = 6
+CREDIT_RETURN = 7
 
 
 def core_timing(params, every=DEFAULT_EVERY):
