@@ -101,6 +101,33 @@ def test_placer_seed_reaches_nextpnr(tmp_path):
     assert locations[0].keys() == locations[1].keys() and locations[0] != locations[1]
 
 
+def test_placer_timing_weight_reaches_nextpnr(tmp_path):
+    """Another weight of timing in the placer is another placement of the same netlist
+    (at a clock the line buffer cannot meet, so that timing weighs), and the result says
+    which weight made it. Broken variant: a weight that does not reach nextpnr gives the
+    default's placement (nextpnr is deterministic), and the placements compare equal."""
+    verilog = line_buffer_verilog(64, 2)
+    placed = {}
+    for weight in (None, 100):
+        result = synthesise(verilog, "ecp5", "line_buffer", pnr=True, freq=400,
+                            timing_weight=weight, keep=tmp_path / str(weight))
+        assert result["status"] == "ok" and result["placer_timing_weight"] == weight, result
+        placed[weight] = json.loads((tmp_path / str(weight) / "placed.json").read_text())
+    locations = [{name: cell["attributes"].get("NEXTPNR_BEL")
+                  for name, cell in placed[weight]["modules"]["top"]["cells"].items()}
+                 for weight in (None, 100)]
+    assert locations[0].keys() == locations[1].keys() and locations[0] != locations[1]
+
+
+def test_placer_timing_weight_is_part_of_the_cache_key():
+    params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
+    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d", timing_weight=weight)
+            for weight in (None, 10, 30)}
+    assert len(keys) == 3
+    assert report_cache.cache_key(params, "ecp5", False, 150.0, "d", timing_weight=30) == \
+        report_cache.cache_key(params, "ecp5", False, 150.0, "d")
+
+
 def test_seed_is_part_of_the_cache_key():
     params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
     keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d", seed=seed) for seed in (None, 1, 2)}
@@ -288,6 +315,16 @@ def test_sweep_tasks_leave_six_input_cores_off_the_ecp5():
      "npstereo: error: --seed places one configuration: drop --camera"),
     (["--paper", "--target", "ecp5", "--pnr", "--seed", "2"],
      "npstereo: error: --seed places one configuration: drop --paper"),
+    (["--width", "32", "--height", "8", "--placer-timing-weight", "30"],
+     "npstereo: error: --placer-timing-weight is nextpnr's placer's: it needs --pnr"),
+    (["--width", "32", "--height", "8", "--target", "ecp5", "--pnr",
+      "--placer-timing-weight", "0"],
+     "npstereo: error: --placer-timing-weight must be a whole number from 1 to 100, not 0"),
+    (["--width", "32", "--height", "8", "--target", "ecp5", "--pnr",
+      "--placer-timing-weight", "101"],
+     "npstereo: error: --placer-timing-weight must be a whole number from 1 to 100, not 101"),
+    (["--camera", "--target", "ecp5", "--pnr", "--placer-timing-weight", "30"],
+     "npstereo: error: --placer-timing-weight places one configuration: drop --camera"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, message, capsys, tmp_path):
     json_path = tmp_path / "out.json"

@@ -62,6 +62,9 @@ def _status(result):
 
 #: nextpnr reads ``--seed`` as a C int.
 MAX_SEED = 2**31 - 1
+#: nextpnr's placer takes any int as its timing weight; 0 would place without timing and
+#: weights beyond 100 were not tried (docs/synthesis-flow.md).
+MIN_TIMING_WEIGHT, MAX_TIMING_WEIGHT = 1, 100
 
 
 def sweep_pnr(params, pnr):
@@ -188,6 +191,11 @@ def add_arguments(parser):
                         help="nextpnr's placer seed for one configuration with --pnr "
                              f"(0 to {MAX_SEED}; default nextpnr's own): another placement "
                              "of the same netlist, for the run-to-run spread of the clock")
+    parser.add_argument("--placer-timing-weight", type=int, default=None, metavar="N",
+                        help="the weight of timing in nextpnr's placer for one configuration "
+                             f"with --pnr ({MIN_TIMING_WEIGHT} to {MAX_TIMING_WEIGHT}; "
+                             "default nextpnr's own, 10): another placement, "
+                             "docs/synthesis-flow.md")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
     width, height = PAPER_SIZE
     parser.add_argument("--paper", action="store_true",
@@ -232,6 +240,16 @@ def _check(args):
             raise UserError("--seed is nextpnr's placer seed: it needs --pnr")
         if sweep is not None:
             raise UserError(f"--seed places one configuration: drop --{sweep}")
+    weight = args.placer_timing_weight
+    if weight is not None:
+        if not MIN_TIMING_WEIGHT <= weight <= MAX_TIMING_WEIGHT:
+            raise UserError(f"--placer-timing-weight must be a whole number from "
+                            f"{MIN_TIMING_WEIGHT} to {MAX_TIMING_WEIGHT}, not {weight}")
+        if not args.pnr:
+            raise UserError("--placer-timing-weight is nextpnr's placer's: it needs --pnr")
+        if sweep is not None:
+            raise UserError(f"--placer-timing-weight places one configuration: drop "
+                            f"--{sweep}")
     if args.json is not None:
         if args.json.is_dir():
             raise UserError(f"--json {args.json} is a folder, not a file")
@@ -275,7 +293,8 @@ def run(args):
                                 earlier=earlier)
     else:
         reports = [synthesis_job(configurations[0], targets, args.pnr, args.freq,
-                                 args.timeout, cache, args.yosys, seed=args.seed)]
+                                 args.timeout, cache, args.yosys, seed=args.seed,
+                                 timing_weight=args.placer_timing_weight)]
         print(f"{configurations[0].describe()}: {_status_line(reports[0])}", file=sys.stderr)
     document = {"tools": tool_versions(), "reports": reports}
     if sweep is not None:

