@@ -84,21 +84,29 @@ def test_nextpnr_reports_clock():
     assert " -> " in result["critical_path"]
 
 
+def _placements(tmp_path, freq, **choices):
+    """The line buffer placed by the real nextpnr once per value of the one placer choice
+    in ``choices`` (a keyword of ``synthesise`` and the result's field): each cell's
+    location, per value."""
+    (keyword, (field, values)), = choices.items()
+    verilog = line_buffer_verilog(64, 2)
+    placed = []
+    for value in values:
+        result = synthesise(verilog, "ecp5", "line_buffer", pnr=True, freq=freq,
+                            keep=tmp_path / str(value), **{keyword: value})
+        assert result["status"] == "ok" and result[field] == value, result
+        design = json.loads((tmp_path / str(value) / "placed.json").read_text())
+        placed.append({name: cell["attributes"].get("NEXTPNR_BEL")
+                       for name, cell in design["modules"]["top"]["cells"].items()})
+    return placed
+
+
 def test_placer_seed_reaches_nextpnr(tmp_path):
     """Another seed is another placement of the same netlist, and the result says which
     seed made it. Broken variant: a seed that does not reach nextpnr gives the default's
     placement (nextpnr is deterministic), and the placements compare equal."""
-    verilog = line_buffer_verilog(64, 2)
-    placed = {}
-    for seed in (None, 5):
-        result = synthesise(verilog, "ecp5", "line_buffer", pnr=True, freq=50, seed=seed,
-                            keep=tmp_path / str(seed))
-        assert result["status"] == "ok" and result["seed"] == seed, result
-        placed[seed] = json.loads((tmp_path / str(seed) / "placed.json").read_text())
-    locations = [{name: cell["attributes"].get("NEXTPNR_BEL")
-                  for name, cell in placed[seed]["modules"]["top"]["cells"].items()}
-                 for seed in (None, 5)]
-    assert locations[0].keys() == locations[1].keys() and locations[0] != locations[1]
+    default, seeded = _placements(tmp_path, 50, seed=("seed", (None, 5)))
+    assert default.keys() == seeded.keys() and default != seeded
 
 
 def test_placer_timing_weight_reaches_nextpnr(tmp_path):
@@ -106,17 +114,9 @@ def test_placer_timing_weight_reaches_nextpnr(tmp_path):
     (at a clock the line buffer cannot meet, so that timing weighs), and the result says
     which weight made it. Broken variant: a weight that does not reach nextpnr gives the
     default's placement (nextpnr is deterministic), and the placements compare equal."""
-    verilog = line_buffer_verilog(64, 2)
-    placed = {}
-    for weight in (None, 100):
-        result = synthesise(verilog, "ecp5", "line_buffer", pnr=True, freq=400,
-                            timing_weight=weight, keep=tmp_path / str(weight))
-        assert result["status"] == "ok" and result["placer_timing_weight"] == weight, result
-        placed[weight] = json.loads((tmp_path / str(weight) / "placed.json").read_text())
-    locations = [{name: cell["attributes"].get("NEXTPNR_BEL")
-                  for name, cell in placed[weight]["modules"]["top"]["cells"].items()}
-                 for weight in (None, 100)]
-    assert locations[0].keys() == locations[1].keys() and locations[0] != locations[1]
+    default, weighted = _placements(
+        tmp_path, 400, timing_weight=("placer_timing_weight", (None, 100)))
+    assert default.keys() == weighted.keys() and default != weighted
 
 
 def test_placer_timing_weight_is_part_of_the_cache_key():

@@ -234,11 +234,11 @@ def study_main(argv, description, measure, report, configs=CONFIGS, group_of=Non
     return 0
 
 
-def measure(dataset, config):
-    """The rows of every scene and variant for one configuration."""
+def measure(dataset, config, variants=VARIANTS):
+    """The rows of every scene and variant (of ``variants``) for one configuration."""
     label = config_label(config)
     for scene, left, right, truth, disparities in conditions(dataset):
-        for variant in VARIANTS:
+        for variant in variants:
             correct, spread = score(left, right, truth, disparities, config, variant)
             print(f"{label} | {scene:26s} | {variant[0]:18s} {correct:6.2f} "
                   f"spread {spread}", flush=True)

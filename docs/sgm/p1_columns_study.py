@@ -18,8 +18,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from left_path_study import (config_label, conditions, report, score,  # noqa: E402
-                             study_main)
+from left_path_study import measure, report, study_main  # noqa: E402
 
 from npstereo.params import SGM_TRACK_AGE, SGM_TRACK_STEPS  # noqa: E402
 
@@ -33,19 +32,9 @@ VARIANTS = [("exact", 1, "exact", 0, 0),
             ("P1 into no column", *_TRACKED, (1, 1))]
 
 
-def measure(dataset, config):
-    """The rows of every scene and variant for one configuration."""
-    label = config_label(config)
-    for scene, left, right, truth, disparities in conditions(dataset):
-        for variant in VARIANTS:
-            correct, spread = score(left, right, truth, disparities, config, variant)
-            print(f"{label} | {scene:26s} | {variant[0]:34s} {correct:6.2f}", flush=True)
-            yield dict(config=label, scene=scene, variant=variant[0], correct=correct,
-                       spread=spread)
-
-
 def main(argv=None):
-    return study_main(argv, __doc__.splitlines()[0], measure, report)
+    return study_main(argv, __doc__.splitlines()[0],
+                      lambda dataset, config: measure(dataset, config, VARIANTS), report)
 
 
 if __name__ == "__main__":
