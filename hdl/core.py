@@ -198,16 +198,14 @@ class NpStereoCore(wiring.Component):
         # register, in front of one adder of returned minus taken: census 9x9, 7.5 ns).
         # The flag the decision reads is registered from the counter itself, a clock late
         # (see _has_room), so no comparison follows the sums.
-        # The credits coming back are registered first and counted a clock late (which is
-        # only more cautious): the output port's queue and the L/R check's retire pulse
-        # then reach the counter's adder from registers (census 9x9 on ECP5: 9.6 ns, eight
-        # levels, from the output port's level through the FIFO's read to the counter).
-        # It is registered twice, as itself and less the credit a position takes, so that
-        # both sums are one adder each, side by side (one adder behind the other was the
-        # critical path of the census 5x5 box at 1280 x 720, R = 1: 6.84 ns, 146.2 MHz).
-        # The two returns are registered apart first: the queue's read and the L/R check's
-        # retire took three LUTs into their sum (census 5x5 box at 1280 x 720, R = 1:
-        # 6.84 ns from the queue's r_rdy).
+        # The credits coming back are counted two clocks late (which is only more
+        # cautious, plan_timing.CREDIT_RETURN), from registers at both ends: the queue's
+        # read and the L/R check's retire are registered apart (their logic into one sum
+        # was three LUTs from the queue's r_rdy, 6.84 ns, census 5x5 box at 1280 x 720,
+        # R = 1; through the FIFO's read, census 9x9: 9.6 ns), and their sum is registered
+        # as itself and less the credit a position takes, so that the counter's two sums
+        # are one adder each, side by side (one adder behind the other: 6.84 ns, the same
+        # core on another placement).
         popped = pipe(m, out_slice.sink.valid & out_slice.sink.ready, 1, "credit_popped",
                       reset=True)
         retired = pipe(m, words.retire & ~words.produce, 1, "credit_retired", reset=True)

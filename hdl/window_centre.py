@@ -237,9 +237,9 @@ def track_centre(m, stage, slots, admit, start, *, shifted, large_window):
         # window_room holds until the line end (rows change only there, W > 2 steps
         # apart) unless this step switches the window to row 0.
         room = Mux(switch_columns, int(0 < highest), window_room)
-        m.d.sync += [x.eq(Mux(line_end, 0, x + 1)),
-                     line_end.eq(~line_end & (x == width - 2)),
-                     line_end_room.eq(~line_end & (x == width - 2) & room)]
+        next_line_end = ~line_end & (x == width - 2)
+        m.d.sync += [x.eq(Mux(line_end, 0, x + 1)), line_end.eq(next_line_end),
+                     line_end_room.eq(next_line_end & room)]
         with m.If(line_end):
             m.d.sync += columns_at(0)
         with m.Else():
