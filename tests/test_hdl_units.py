@@ -578,7 +578,7 @@ def test_broken_aggregation_row_mask_is_caught(monkeypatch):
 
 def test_broken_aggregation_column_mask_is_caught(monkeypatch):
     """Columns beyond the frame's edges not masked: the sums wrap around to the next row."""
-    monkeypatch.setattr(hdl_aggregation, "_tap_inside", lambda newest_x, k, a: 1)
+    monkeypatch.setattr(hdl_aggregation, "_tap_inside", lambda newest_x, k, a: Const(1))
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="transforms"), seed=1)
