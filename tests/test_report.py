@@ -20,6 +20,7 @@ from PIL import Image
 from npstereo.gen.cli import cmd_report
 from npstereo.gen.cli.main import main
 from npstereo.gen.explore import engine
+from npstereo.gen.flow.nextpnr import Placement
 from npstereo.gen.flow.synthesise import synthesise
 from npstereo.gen.flow.tools import tool_versions
 from npstereo.gen.reports import cache as report_cache, synthesis
@@ -86,14 +87,14 @@ def test_nextpnr_reports_clock():
 
 def _placements(tmp_path, freq, **choices):
     """The line buffer placed by the real nextpnr once per value of the one placer choice
-    in ``choices`` (a keyword of ``synthesise`` and the result's field): each cell's
+    in ``choices`` (a field of ``Placement`` and the result's field): each cell's
     location, per value."""
     (keyword, (field, values)), = choices.items()
     verilog = line_buffer_verilog(64, 2)
     placed = []
     for value in values:
         result = synthesise(verilog, "ecp5", "line_buffer", pnr=True, freq=freq,
-                            keep=tmp_path / str(value), **{keyword: value})
+                            keep=tmp_path / str(value), placement=Placement(**{keyword: value}))
         assert result["status"] == "ok" and result[field] == value, result
         design = json.loads((tmp_path / str(value) / "placed.json").read_text())
         placed.append({name: cell["attributes"].get("NEXTPNR_BEL")
@@ -121,19 +122,45 @@ def test_placer_timing_weight_reaches_nextpnr(tmp_path):
 
 def test_placer_timing_weight_is_part_of_the_cache_key():
     params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
-    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d", timing_weight=weight)
+    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d",
+                                   placement=Placement(timing_weight=weight))
             for weight in (None, 10, 30)}
     assert len(keys) == 3
-    assert report_cache.cache_key(params, "ecp5", False, 150.0, "d", timing_weight=30) == \
+    assert report_cache.cache_key(params, "ecp5", False, 150.0, "d",
+                                  placement=Placement(timing_weight=30)) == \
         report_cache.cache_key(params, "ecp5", False, 150.0, "d")
+
+
+def test_placement_gives_nextpnr_its_arguments():
+    assert Placement().arguments() == []
+    assert Placement(seed=0, timing_weight=30).arguments() == \
+        ["--seed", "0", "--placer-heap-timingweight", "30"]
+    assert Placement(timing_weight=1).fields() == {"seed": None, "placer_timing_weight": 1}
+
+
+@pytest.mark.parametrize("choices, message", [
+    ({"seed": -1}, "Placement seed must be a whole number from 0 to 2147483647, not -1"),
+    ({"seed": 2**31}, "Placement seed must be a whole number from 0 to 2147483647, not "
+                      "2147483648"),
+    ({"timing_weight": 0}, "Placement timing_weight must be a whole number from 1 to 100, "
+                           "not 0"),
+    ({"timing_weight": 101}, "Placement timing_weight must be a whole number from 1 to 100, "
+                             "not 101"),
+])
+def test_placement_out_of_range_is_refused(choices, message):
+    with pytest.raises(ValueError) as error:
+        Placement(**choices)
+    assert str(error.value) == message
 
 
 def test_seed_is_part_of_the_cache_key():
     params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
-    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d", seed=seed) for seed in (None, 1, 2)}
+    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d",
+                                   placement=Placement(seed=seed)) for seed in (None, 1, 2)}
     assert len(keys) == 3
     # Synthesis alone does not depend on the placer.
-    assert report_cache.cache_key(params, "ecp5", False, 150.0, "d", seed=3) == \
+    assert report_cache.cache_key(params, "ecp5", False, 150.0, "d",
+                                  placement=Placement(seed=3)) == \
         report_cache.cache_key(params, "ecp5", False, 150.0, "d")
 
 
@@ -316,7 +343,8 @@ def test_sweep_tasks_leave_six_input_cores_off_the_ecp5():
     (["--paper", "--target", "ecp5", "--pnr", "--seed", "2"],
      "npstereo: error: --seed places one configuration: drop --paper"),
     (["--width", "32", "--height", "8", "--placer-timing-weight", "30"],
-     "npstereo: error: --placer-timing-weight is nextpnr's placer's: it needs --pnr"),
+     "npstereo: error: --placer-timing-weight is nextpnr's placer's weight of timing: it "
+     "needs --pnr"),
     (["--width", "32", "--height", "8", "--target", "ecp5", "--pnr",
       "--placer-timing-weight", "0"],
      "npstereo: error: --placer-timing-weight must be a whole number from 1 to 100, not 0"),

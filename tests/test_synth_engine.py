@@ -299,7 +299,8 @@ def _first_attempt_fails(monkeypatch, message):
 
 def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch):
     attempts = _first_attempt_fails(monkeypatch, _CLOCK_FAILURE)
-    result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path, seed=3)
+    result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path,
+                        placement=nextpnr.Placement(seed=3))
     assert result["status"] == "ok" and result["fmax_mhz"] > 0, result
     assert result["clock_pin"] == nextpnr.CLOCK_PIN and result["seed"] == 3
     # The placement on the clock pin keeps the seed asked for.

@@ -22,6 +22,7 @@ from ..atomic import write_text
 from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
     task_key
 from ..flow.capacity import DEFAULT_DEVICE
+from ..flow.nextpnr import PLACEMENT_RANGES, Placement
 from ..flow.tools import TARGETS, tool_versions
 from ..reports.cache import earlier_reports, seed_cache, source_hash
 from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
@@ -60,11 +61,10 @@ def _status(result):
     return message if message.startswith(status) else f"{status} ({message})"
 
 
-#: nextpnr reads ``--seed`` as a C int.
-MAX_SEED = 2**31 - 1
-#: nextpnr's placer takes any int as its timing weight; 0 would place without timing and
-#: weights beyond 100 were not tried (docs/synthesis-flow.md).
-MIN_TIMING_WEIGHT, MAX_TIMING_WEIGHT = 1, 100
+#: Each of :class:`~..flow.nextpnr.Placement`'s choices: its option, and what it is.
+PLACEMENT_OPTIONS = {"seed": ("--seed", "nextpnr's placer seed"),
+                     "timing_weight": ("--placer-timing-weight",
+                                       "nextpnr's placer's weight of timing")}
 
 
 def sweep_pnr(params, pnr):
@@ -189,11 +189,12 @@ def add_arguments(parser):
     add_synthesis_arguments(parser, "configuration and target")
     parser.add_argument("--seed", type=int, default=None,
                         help="nextpnr's placer seed for one configuration with --pnr "
-                             f"(0 to {MAX_SEED}; default nextpnr's own): another placement "
+                             "({} to {}; default nextpnr's own): another placement "
+                             .format(*PLACEMENT_RANGES["seed"]) +
                              "of the same netlist, for the run-to-run spread of the clock")
     parser.add_argument("--placer-timing-weight", type=int, default=None, metavar="N",
                         help="the weight of timing in nextpnr's placer for one configuration "
-                             f"with --pnr ({MIN_TIMING_WEIGHT} to {MAX_TIMING_WEIGHT}; "
+                             "with --pnr ({} to {}; ".format(*PLACEMENT_RANGES["timing_weight"]) +
                              "default nextpnr's own, 10): another placement, "
                              "docs/synthesis-flow.md")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
@@ -232,24 +233,18 @@ def _check(args):
         raise UserError(f"--freq must be a positive clock in MHz, not {args.freq:g}")
     if args.pnr and args.target == "cyclonev":
         raise UserError("--pnr places and routes for ecp5: use --target ecp5 or all")
-    if args.seed is not None:
-        if not 0 <= args.seed <= MAX_SEED:
-            raise UserError(f"--seed must be a whole number from 0 to {MAX_SEED}, not "
-                            f"{args.seed}")
+    for field, (option, what) in PLACEMENT_OPTIONS.items():
+        value = getattr(args, _placement_dest(option))
+        if value is None:
+            continue
+        low, high = PLACEMENT_RANGES[field]
+        if not low <= value <= high:
+            raise UserError(f"{option} must be a whole number from {low} to {high}, not "
+                            f"{value}")
         if not args.pnr:
-            raise UserError("--seed is nextpnr's placer seed: it needs --pnr")
+            raise UserError(f"{option} is {what}: it needs --pnr")
         if sweep is not None:
-            raise UserError(f"--seed places one configuration: drop --{sweep}")
-    weight = args.placer_timing_weight
-    if weight is not None:
-        if not MIN_TIMING_WEIGHT <= weight <= MAX_TIMING_WEIGHT:
-            raise UserError(f"--placer-timing-weight must be a whole number from "
-                            f"{MIN_TIMING_WEIGHT} to {MAX_TIMING_WEIGHT}, not {weight}")
-        if not args.pnr:
-            raise UserError("--placer-timing-weight is nextpnr's placer's: it needs --pnr")
-        if sweep is not None:
-            raise UserError(f"--placer-timing-weight places one configuration: drop "
-                            f"--{sweep}")
+            raise UserError(f"{option} places one configuration: drop --{sweep}")
     if args.json is not None:
         if args.json.is_dir():
             raise UserError(f"--json {args.json} is a folder, not a file")
@@ -262,6 +257,16 @@ def _check(args):
         raise UserError("--camera uses the camera formats' frames: drop --width/--height")
     if sweep is not None:
         check_output_folder(args.out)
+
+
+def _placement_dest(option):
+    return option[2:].replace("-", "_")
+
+
+def _placement(args):
+    """The placer's choices the options give (checked by :func:`_check`)."""
+    return Placement(**{field: getattr(args, _placement_dest(option))
+                        for field, (option, _) in PLACEMENT_OPTIONS.items()})
 
 
 def run(args):
@@ -293,8 +298,8 @@ def run(args):
                                 earlier=earlier)
     else:
         reports = [synthesis_job(configurations[0], targets, args.pnr, args.freq,
-                                 args.timeout, cache, args.yosys, seed=args.seed,
-                                 timing_weight=args.placer_timing_weight)]
+                                 args.timeout, cache, args.yosys,
+                                 placement=_placement(args))]
         print(f"{configurations[0].describe()}: {_status_line(reports[0])}", file=sys.stderr)
     document = {"tools": tool_versions(), "reports": reports}
     if sweep is not None:

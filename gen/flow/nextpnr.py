@@ -6,6 +6,7 @@ a clock net that cannot be routed from the pad the placer chose is placed again 
 pin (``docs/synthesis-flow.md``).
 """
 
+import dataclasses
 import re
 import shutil
 import time
@@ -16,7 +17,41 @@ from .logs import nextpnr_timing
 from .processes import run_tool
 from .tools import find_tool
 
-__all__ = ["CLOCK_PIN", "place_and_route"]
+__all__ = ["CLOCK_PIN", "PLACEMENT_RANGES", "Placement", "place_and_route"]
+
+#: Allowed values of each of :class:`Placement`'s choices: nextpnr reads ``--seed`` as a C
+#: int; its placer takes any int as its timing weight, but 0 would place without timing
+#: and weights beyond 100 were not tried (docs/synthesis-flow.md).
+PLACEMENT_RANGES = {"seed": (0, 2**31 - 1), "timing_weight": (1, 100)}
+
+
+@dataclasses.dataclass(frozen=True)
+class Placement:
+    """nextpnr's choices in placing one netlist: ``seed`` (its ``--seed``) and
+    ``timing_weight`` (its placer's ``--placer-heap-timingweight``, nextpnr's own 10), None
+    each for nextpnr's own. The same netlist placed with other choices is another
+    placement: a seed samples the run-to-run spread of the clock, the weight trades
+    wire length for timing (docs/synthesis-flow.md)."""
+
+    seed: int | None = None
+    timing_weight: int | None = None
+
+    def __post_init__(self):
+        for field, (low, high) in PLACEMENT_RANGES.items():
+            value = getattr(self, field)
+            if value is not None and not low <= value <= high:
+                raise ValueError(f"Placement {field} must be a whole number from {low} to "
+                                 f"{high}, not {value}")
+
+    def arguments(self):
+        """nextpnr's arguments for these choices."""
+        return ([] if self.seed is None else ["--seed", str(self.seed)]) + \
+            ([] if self.timing_weight is None else
+             ["--placer-heap-timingweight", str(self.timing_weight)])
+
+    def fields(self):
+        """The choices as a result records them (and a cache key holds those given)."""
+        return {"seed": self.seed, "placer_timing_weight": self.timing_weight}
 
 #: Timing-driven rip-up re-routes every arc that misses the clock, each iteration, and
 #: nextpnr 0.11 keeps at it for 1,500 iterations. A design far from the target (thousands
@@ -162,22 +197,18 @@ CLOCK_PIN = "G2"
 _CLOCK_UNROUTED = re.compile(r"Failed to route arc \S+ of net 'clk\$")
 
 
-def place_and_route(result, build, part, freq, deadline, seed=None, timing_weight=None):
+def place_and_route(result, build, part, freq, deadline, placement=Placement()):
     """nextpnr: place once (``placed.json``; a stalled placer is stopped,
     :data:`_PLACER_SILENCE`), then route that placement with timing-driven rip-up, and
     once more without it if the rip-up is abandoned (:func:`_hopeless_ripup`), without
     placing again; if the clock net cannot be routed from the pad the placer chose, all
-    of it again with the clock on :data:`CLOCK_PIN`. ``seed``: nextpnr's ``--seed``
-    (None leaves nextpnr's own); one netlist placed with another seed is another
-    placement, so a seed samples the run-to-run spread of the clock (docs/synthesis-flow.md).
-    ``timing_weight``: the placer's ``--placer-heap-timingweight`` (None: nextpnr's own).
-    Sets ``router``, ``ripup_abandoned``, ``clock_pin``, ``seed``, ``placer_timing_weight``,
-    ``fmax_mhz`` and ``critical_path``; returns None or a failure."""
-    result["clock_pin"], result["seed"] = None, seed
-    result["placer_timing_weight"] = timing_weight
-    placer = [] if seed is None else ["--seed", str(seed)]
-    if timing_weight is not None:
-        placer += ["--placer-heap-timingweight", str(timing_weight)]
+    of it again with the clock on :data:`CLOCK_PIN`, each time with ``placement``'s
+    choices (a :class:`Placement`). Sets ``router``, ``ripup_abandoned``, ``clock_pin``,
+    ``seed``, ``placer_timing_weight``, ``fmax_mhz`` and ``critical_path``; returns None or
+    a failure."""
+    result["clock_pin"] = None
+    result.update(placement.fields())
+    placer = placement.arguments()
     failure = _place_and_route_once(result, build, part, freq, deadline, placer, [])
     if failure is not None and _CLOCK_UNROUTED.search(failure):
         write_text(build / "clock.lpf", f'LOCATE COMP "clk" SITE "{CLOCK_PIN}";\n')

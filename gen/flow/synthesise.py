@@ -31,7 +31,7 @@ from .bram_output_register import pack_outreg_file
 from .capacity import DEFAULT_DEVICE, device as find_device, fit_message, utilisation
 from .logic_depth import logic_depth
 from .logs import carry_chains, cell_counts, memory_cells_bits, target_resources, time_split
-from .nextpnr import place_and_route
+from .nextpnr import Placement, place_and_route
 from .processes import run_tool
 from .tools import TARGETS, chosen_engine, engine_version
 from .yosys import synthesis_script, yosys_command
@@ -40,8 +40,7 @@ __all__ = ["synthesise"]
 
 
 def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=None,
-               engine=None, outreg=True, device=DEFAULT_DEVICE, seed=None,
-               timing_weight=None):
+               engine=None, outreg=True, device=DEFAULT_DEVICE, placement=Placement()):
     """Synthesise Verilog text for one target and return its figures.
 
     Parameters
@@ -74,12 +73,9 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         For ``ecp5``: the ECP5 part of :data:`.capacity.DEVICES` whose capacity is checked
         and that nextpnr places on (default :data:`~.capacity.DEFAULT_DEVICE`, the
         LFE5U-85F).
-    seed : int or None
-        For ``ecp5`` with ``pnr``: nextpnr's placer seed (None: nextpnr's own), recorded
-        as ``seed``.
-    timing_weight : int or None
-        For ``ecp5`` with ``pnr``: the weight of timing in nextpnr's placer (its
-        ``--placer-heap-timingweight``; None: nextpnr's own, 10), recorded as
+    placement : Placement
+        For ``ecp5`` with ``pnr``: nextpnr's placer seed and weight of timing
+        (:class:`~.nextpnr.Placement`; nextpnr's own by default), recorded as ``seed`` and
         ``placer_timing_weight`` (docs/synthesis-flow.md).
 
     Returns
@@ -132,7 +128,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         if failure is None:
             # A failure from here on is place and route's: the synthesis figures stand.
             failure = _after_synthesis(result, target, build, pnr, freq, deadline, outreg,
-                                       part, seed, timing_weight)
+                                       part, placement)
         else:
             result = dict(identity, fmax_mhz=None)
         if failure is not None:
@@ -144,8 +140,7 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
     return result
 
 
-def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, seed,
-                     timing_weight):
+def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, placement):
     """Figures of a finished synthesis, packing and place and route; None or a failure."""
     result["yosys_time_split"] = time_split(build / "yosys.log")
     result.update(target_resources(target, cell_counts(build / "stat.json")))
@@ -186,5 +181,5 @@ def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, s
         return None
     if deadline is not None and time.monotonic() >= deadline:
         return "timeout"
-    return place_and_route(result, build, part, freq, deadline, seed, timing_weight)
+    return place_and_route(result, build, part, freq, deadline, placement)
 

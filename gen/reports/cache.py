@@ -16,6 +16,7 @@ from ...hdl.verilog import core_verilog
 from ...params import StereoParams
 from ..atomic import write_text
 from ..flow.capacity import DEFAULT_DEVICE
+from ..flow.nextpnr import Placement
 from ..flow.tools import tool_versions
 
 __all__ = ["source_hash", "golden_source_hash", "verilog_digest", "configuration_digest",
@@ -97,15 +98,14 @@ def configuration_digest(params, cache=None):
     return design(params, cache)[0]
 
 
-def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE, seed=None,
-              timing_weight=None):
+def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE,
+              placement=Placement()):
     """Key of one result: configuration, target, tools and the Verilog's digest, and for
-    ECP5 place and route the clock constraint, the part, the placer seed and the placer's
-    timing weight (the LFE5U-85F's results at nextpnr's own seed and weight keep the key
-    they had before other parts, seeds and weights could be chosen)."""
+    ECP5 place and route the clock constraint, the part and the placer's choices (the
+    LFE5U-85F's results at nextpnr's own choices keep the key they had before other parts,
+    seeds and weights could be chosen)."""
     if target != "ecp5" or not pnr:
-        pnr, freq, device, seed = False, None, DEFAULT_DEVICE, None  # only nextpnr's
-        timing_weight = None
+        pnr, freq, device, placement = False, None, DEFAULT_DEVICE, Placement()  # nextpnr's
     # ``auto`` is the line buffer it chooses: a single report with the default and the
     # paper sweep's explicit choice are one netlist, and one result.
     params = dataclasses.replace(params, line_buffer=params.stored_rows)
@@ -113,10 +113,8 @@ def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE, seed=Non
            "tools": tool_versions(), "verilog": digest}
     if device != DEFAULT_DEVICE:
         key["device"] = device
-    if seed is not None:
-        key["seed"] = seed
-    if timing_weight is not None:
-        key["placer_timing_weight"] = timing_weight
+    key.update({name: value for name, value in placement.fields().items()
+                if value is not None})
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
 
 

@@ -20,6 +20,7 @@ from ...hdl.verilog import TOP_NAME, core_verilog
 from ...params import StereoParams
 from ..flow.block_rams import core_block_rams
 from ..flow.capacity import DEFAULT_DEVICE, fit_message, memory_fit_message, target_device
+from ..flow.nextpnr import Placement
 from ..flow.synthesise import synthesise
 from .cache import cache_key, design, incomplete, memoised_digest, read_result, refused, \
     store_result
@@ -28,8 +29,8 @@ __all__ = ["synthesis_report", "lookup", "store_report", "failed_report", "synth
            "memory_refusal", "refusal_report"]
 
 
-def _path(cache, params, target, pnr, freq, digest, device, seed=None, timing_weight=None):
-    key = cache_key(params, target, pnr, freq, digest, device, seed, timing_weight)
+def _path(cache, params, target, pnr, freq, digest, device, placement=Placement()):
+    key = cache_key(params, target, pnr, freq, digest, device, placement)
     return Path(cache) / f"{key}.json"
 
 
@@ -81,7 +82,7 @@ def _refusals(params, targets, device):
 
 
 def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache=None,
-                     engine=None, device=DEFAULT_DEVICE, seed=None, timing_weight=None):
+                     engine=None, device=DEFAULT_DEVICE, placement=Placement()):
     """Synthesis figures of one configuration for each target, with cycles and frame rate.
 
     Results that are ``ok`` or ``failed`` are cached in ``cache`` (a folder) when given;
@@ -91,9 +92,8 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
     A target whose device cannot hold the core's memories (the ECP5 part, or
     :data:`~npstereo.gen.flow.capacity.CYCLONEV_DEVICE`) gets :func:`memory_refusal`'s
     result before anything is generated; when every target does, no Verilog is generated
-    (``verilog_sha`` None). ``seed``: nextpnr's placer seed (None: nextpnr's own), and
-    ``timing_weight``, its placer's weight of timing (None: nextpnr's own), each part of the
-    cache key when given.
+    (``verilog_sha`` None). ``placement``: nextpnr's choices
+    (:class:`~npstereo.gen.flow.nextpnr.Placement`), those given part of the cache key.
     """
     results = _refusals(params, targets, device)
     if len(results) == len(targets):
@@ -105,7 +105,7 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
         if target in results:
             continue
         path = None if cache is None else _path(cache, params, target, pnr, freq, digest,
-                                                device, seed, timing_weight)
+                                                device, placement)
         cached = None if path is None else read_result(path)
         if cached is not None and incomplete(cached):
             verilog = core_verilog(params) if verilog is None else verilog
@@ -116,8 +116,7 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
         if verilog is None:
             verilog = core_verilog(params)
         result = synthesise(verilog, target, TOP_NAME, pnr=pnr, freq=freq, timeout=timeout,
-                            engine=engine, device=device, seed=seed,
-                            timing_weight=timing_weight)
+                            engine=engine, device=device, placement=placement)
         if target == "ecp5":
             result.update(pnr=pnr, freq=freq)
             if device != DEFAULT_DEVICE:
@@ -192,7 +191,7 @@ def failed_report(params, targets, message):
 
 
 def synthesis_job(params, targets, pnr, freq, timeout, cache, engine,
-                  device=DEFAULT_DEVICE, seed=None, timing_weight=None):
+                  device=DEFAULT_DEVICE, placement=Placement()):
     """One sweep cell on a worker; never raises, so the sweep goes on.
 
     The worker uses the shared cache when it can write there (a remote worker may not
@@ -205,6 +204,6 @@ def synthesis_job(params, targets, pnr, freq, timeout, cache, engine,
             cache = None
     try:
         return synthesis_report(params, targets, pnr, freq, timeout, cache, engine, device,
-                                seed, timing_weight)
+                                placement)
     except Exception as error:  # a crash in generation is a cell's result, not the sweep's
         return failed_report(params, targets, f"{type(error).__name__}: {error}")
