@@ -394,7 +394,13 @@ class CalculationStage(wiring.Component):
                 # and the aggregation masks the rows of each sum.
                 m.d.sync += ok.eq(tag.valid & tag.live)
             else:
-                m.d.sync += ok.eq(tag.valid & tag.live & (tag.y >= k) & (tag.y < p.height + k))
+                # The row's two comparisons a clock ahead, from ``early``, each a register
+                # of its own: both carry chains and the ANDs in one clock were census 5x5's
+                # critical path at 1920 x 1080 on ECP5 (6.96 ns, 16 cells).
+                above = Signal(name=f"cost_row_above{k}")
+                below = Signal(name=f"cost_row_below{k}")
+                m.d.sync += [above.eq(early.y >= k), below.eq(early.y < p.height + k),
+                             ok.eq(tag.valid & tag.live & above & below)]
             ok = pipe(m, ok, self.costed - start - 1, f"cost_row_ok{k}")
             # One tap per skew: the chain of unit 0's flags, a register per step.
             taps = [ok]
