@@ -8,7 +8,7 @@ from amaranth.hdl import Const, Mux
 from ..params import SGM_LEFT_P1_PARITY
 from .common import replica
 
-__all__ = ["small_step", "less", "minimum", "LANES_PER_COPY", "copies"]
+__all__ = ["small_step", "less", "minimum", "winners", "pick", "LANES_PER_COPY", "copies"]
 
 
 def small_step(x):
@@ -40,17 +40,33 @@ def minimum(candidates, bits, small=None):
                 beats[(i, k)] = bit | ~small
 
     def choose(beats):
-        value = Const(0, bits)
-        for i, candidate in enumerate(candidates):
-            wins = Const(1)
-            for k in range(count):
-                if k < i:
-                    wins &= beats[(i, k)]
-                elif k > i:
-                    wins &= ~beats[(k, i)]
-            value |= Mux(wins, candidate, 0)
-        return value
+        return pick(candidates, winners(beats, count), bits)
     return beats, choose
+
+
+def winners(beats, count=None):
+    """One flag per candidate, set for the smallest (ties to the first) of the first
+    ``count`` (all that ``beats`` compares by default), from :func:`minimum`'s comparison
+    bits: candidate i beats every earlier one and no later one beats it."""
+    count = 1 + max(i for i, _ in beats) if count is None else count
+    flags = []
+    for i in range(count):
+        wins = Const(1)
+        for k in range(count):
+            if k < i:
+                wins &= beats[(i, k)]
+            elif k > i:
+                wins &= ~beats[(k, i)]
+        flags.append(wins)
+    return flags
+
+
+def pick(candidates, wins, bits):
+    """The candidate whose flag in the one-hot ``wins`` is set."""
+    value = Const(0, bits)
+    for flag, candidate in zip(wins, candidates):
+        value |= Mux(flag, candidate, 0)
+    return value
 
 
 #: Lanes per copy of a scalar that every lane uses (ref + P2, the fresh start).
