@@ -5,12 +5,18 @@ Part of :func:`.sgm_left.left_path` (its module docstring, "The reference", desc
 what these build; docs/hardware.md "Semi-global aggregation" the structure).
 """
 
-from amaranth.hdl import Array, Const, Mux, Signal, unsigned
+from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
 from .common import bits_for, register, replica
 
 __all__ = ["reference_sum", "pick_references"]
+
+
+#: Bits of a C(x - k, b(x)) term chosen by one copy of its file's index: one register of
+#: the index into all six bits' multiplexers was census 7x7 SGM's critical path at R = 10
+#: (the index into a term, 6.72 ns, 3 levels).
+TERM_BITS_PER_INDEX = 3
 
 
 def _pick_groups(count, lane_bits):
@@ -63,9 +69,16 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
     # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers
     # and the additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz).
     x = column(at - 1)
-    terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
-                 Array(entries)[register(m, (x - k)[:index], index, f"sgm_left_entry{k}")], 0)
-             for k, entries in enumerate(sums, 1)]
+
+    def term(k, entries):
+        """C(x - k, b(x)) from file ``entries``, its index once per group of bits."""
+        width, parts = len(entries[0]), []
+        for low in range(0, width, TERM_BITS_PER_INDEX):
+            where = replica(m, (x - k)[:index], f"sgm_left_entry{k}_{low}", unsigned(index),
+                            reset_less=True)
+            parts.append(Array(e[low:low + TERM_BITS_PER_INDEX] for e in entries)[where])
+        return Mux(register(m, x > k, 1, f"sgm_left_has{k}"), Cat(*parts), 0)
+    terms = [term(k, entries) for k, entries in enumerate(sums, 1)]
     if t.left_sum_clocks >= 2:
         terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
                  for k, term in enumerate(terms, 1)]
