@@ -46,13 +46,14 @@ def frame_beats(left, right, *, drop_last_at=None):
 
 
 def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_cycles=None,
-                 before_start=None):
+                 before_start=None, watch=None):
     """Feed ``beats`` (RESET markers: a reset; an int n: n idle clocks) through a core;
     collect every output word.
 
     The source keeps a beat offered until it is taken (stream rule) but inserts random gaps
     before offering the next; the sink drops ``ready`` at random. ``before_start(ctx)``
-    runs in the testbench before the first clock.
+    runs in the testbench before the first clock. ``watch(dut)`` names signals of the core
+    to sample in every clock.
 
     Returns
     -------
@@ -60,14 +61,16 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
         ``words`` (list of (word, first, last), the word an integer), ``errors``
         (framing-error pulses), ``frame_starts`` (clock of every output word with
         ``first``), ``cycles`` (clocks until the last word came out), ``last_input`` (the
-        clock the last beat was taken), ``latency`` (the core's, in positions).
+        clock the last beat was taken), ``latency`` (the core's, in positions), and with
+        ``watch`` ``watched`` (the watched signals' values, a tuple per clock).
     """
     dut = NpStereoCore(params)
+    watched_signals = [] if watch is None else watch(dut)
     sink, source = dut.sink, dut.source
     rst = Signal()
     top = ResetInserter({"sync": rst})(dut)
     rng = random.Random(seed)
-    words, starts, state = [], [], {"errors": 0, "cycles": 0}
+    words, starts, state = [], [], {"errors": 0, "cycles": 0, "watched": []}
     beats = list(beats)
     expected = sum(1 for b in beats if b != RESET and not isinstance(b, int))
     slack = 4 * dut.latency * params.rounds + 50
@@ -114,6 +117,8 @@ def run_scenario(params, beats, *, valid_prob=1.0, ready_prob=1.0, seed=0, max_c
                     starts.append(cycle)
                 last_word_cycle = cycle
             state["errors"] += ctx.get(dut.framing_error)
+            if watched_signals:
+                state["watched"].append(tuple(ctx.get(s) for s in watched_signals))
             await ctx.tick()
             cycle += 1
             if index >= len(beats) and cycle > last_word_cycle + slack:

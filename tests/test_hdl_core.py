@@ -20,7 +20,7 @@ from npstereo.hdl.core import NpStereoCore
 from npstereo.params import ParameterError, StereoParams
 
 from hdl_helpers import RESET, check_frames, frame_beats, random_contents, record_memories, \
-    refused_quietly
+    refused_quietly, run_scenario
 from scenes import stereo_pair
 
 GAPS = 0.65  # probability that the source offers / the sink takes: >= 30 % stalls each
@@ -221,6 +221,22 @@ def test_second_frame_at_full_rate_sees_only_its_own_rows(line_buffer):
                           lr_threshold=1, width=40, height=12, line_buffer=line_buffer)
     pairs = [stereo_pair("random", 12, 40, 0), stereo_pair("layers", 12, 40, 0, 8)]
     check_frames(params, pairs, frame_beats(*pairs[0]) + frame_beats(*pairs[1]))
+
+
+def test_rows_saturate_below_the_frame_in_a_flush():
+    """In the flush after a frame of a small core the window centre's row counts on past
+    the frame to y_range's highest, H + a + 1, and stays there: it never wraps round into
+    the rows above the frame (where a longer flush would bring it back into the frame).
+    Broken variant: the saturation left out (``y_room`` ignored), the row wraps to -8."""
+    params = StereoParams(transform="census", block=3, disparities=4, rounds=1, width=5,
+                          height=4)
+    pair = stereo_pair("random", 4, 5, seed=2)
+    result = run_scenario(params, frame_beats(*pair) + [300],
+                          watch=lambda dut: [dut.input_stage.tag.y])
+    rows = [y for y, in result["watched"]]
+    lowest, highest = common.y_range(params)
+    assert max(rows) == highest and rows[-1] == highest
+    assert min(rows) >= lowest
 
 
 @pytest.mark.parametrize("lr,aggregation", [(1, 1), (None, 3), (1, 3)])
