@@ -13,10 +13,20 @@ from .common import bits_for, register, replica
 __all__ = ["reference_sum", "pick_references"]
 
 
-#: Bits of a C(x - k, b(x)) term chosen by one copy of its file's index: one register of
-#: the index into all six bits' multiplexers was census 7x7 SGM's critical path at R = 10
-#: (the index into a term, 6.72 ns, 3 levels).
-TERM_BITS_PER_INDEX = 3
+#: Bits of a file's entry chosen by one copy of its index: one register of the index into
+#: all the bits' multiplexers was census 7x7 SGM's critical path at R = 10 (into a C(x - k,
+#: b(x)) term, 6.72 ns, 3 levels; into the start Lu(x - J, b(x)), 6.85 ns, 5 levels).
+BITS_PER_INDEX = 3
+
+
+def _read_file(m, entries, index, name):
+    """``entries[index]`` (``index`` a value a clock ahead), the index registered once per
+    :data:`BITS_PER_INDEX` bits of the entries."""
+    width, parts = len(entries[0]), []
+    for low in range(0, width, BITS_PER_INDEX):
+        at = replica(m, index, f"{name}_{low}", unsigned(len(index)), reset_less=True)
+        parts.append(Array(e[low:low + BITS_PER_INDEX] for e in entries)[at])
+    return Cat(*parts)
 
 
 def _pick_groups(count, lane_bits):
@@ -70,15 +80,9 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
     # and the additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz).
     x = column(at - 1)
 
-    def term(k, entries):
-        """C(x - k, b(x)) from file ``entries``, its index once per group of bits."""
-        width, parts = len(entries[0]), []
-        for low in range(0, width, TERM_BITS_PER_INDEX):
-            where = replica(m, (x - k)[:index], f"sgm_left_entry{k}_{low}", unsigned(index),
-                            reset_less=True)
-            parts.append(Array(e[low:low + TERM_BITS_PER_INDEX] for e in entries)[where])
-        return Mux(register(m, x > k, 1, f"sgm_left_has{k}"), Cat(*parts), 0)
-    terms = [term(k, entries) for k, entries in enumerate(sums, 1)]
+    terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
+                 _read_file(m, entries, (x - k)[:index], f"sgm_left_entry{k}"), 0)
+             for k, entries in enumerate(sums, 1)]
     if t.left_sum_clocks >= 2:
         terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
                  for k, term in enumerate(terms, 1)]
@@ -96,7 +100,7 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
     early = t.left_start_early
     x = column(t.left_reference - 1 - early)
     near = register(m, x <= steps, 1, "sgm_left_near")
-    start = Mux(near, m0, Array(chosen)[register(m, x[:index], index, "sgm_left_chosen_at")])
+    start = Mux(near, m0, _read_file(m, chosen, x[:index], "sgm_left_chosen_at"))
     if early:
         start = register(m, start, bits, "sgm_left_start")
     return (start + total)[:bits]
