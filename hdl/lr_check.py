@@ -145,7 +145,8 @@ class LRCheck(wiring.Component):
                          self.frame_end.eq((tag.x == p.width - 1) & (tag.y == p.height - 1))]
             return m
         final, leaving = self._right_winners(m, slots)
-        # Waiting for late left winners (lr_exit_delay): the final dR and its pulse.
+        # The final dR and its pulse registered on their way to the check, and waiting for
+        # late left winners (lr_exit_delay).
         wait = self.exit - (lr_stage_b(p) + p.rounds)
         final, leaving = pipe(m, final, wait, "right_final_wait"), pipe(
             m, leaving, wait, "right_final_valid_wait", reset=True)

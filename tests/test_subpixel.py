@@ -264,7 +264,7 @@ def _late_winners():
     params = StereoParams(transform="census", block=3, disparities=3, rounds=1, aggregation=1,
                           lr_threshold=0, width=20, height=4, subpixel_bits=5)
     assert plan_timing.lr_exit_delay(params, core_timing(params).left
-                                     - core_timing(params).sums) > 0
+                                     - core_timing(params).sums) > plan_timing.LR_EXIT_REGISTERS
     return params, stereo_pair("independent", 4, 20, 3, 3)
 
 
