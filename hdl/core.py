@@ -263,9 +263,16 @@ class NpStereoCore(wiring.Component):
             "frame_end", "credit", "flush_start", "done")})
         now = Signal(conditions)
         # With the input stage's decision a clock late (decision_clocks, below), its
-        # switch_pending rises a clock late too: the start of that clock holds the next one.
+        # switch_pending rises a clock late too, and at R = 1 it is registered here again:
+        # the start of those clocks holds the next one.
         start_held = Signal(name="start_held")
-        can_start = head_valid & head.first & ~(inp.switch_pending | start_held) & has_credit
+        switch_pending = inp.switch_pending
+        if decision_clocks(rounds):
+            # The input stage's flag straight into the admission was census 5x5 box's
+            # critical path at 1280 x 720 and 1920 x 1080 (8.78 ns into the credits, 8.53
+            # ns into the input queue's read): a clock late it only holds a start longer.
+            switch_pending = pipe(m, switch_pending, 1, "switch_pending_late", reset=True)
+        can_start = head_valid & head.first & ~(switch_pending | start_held) & has_credit
         m.d.comb += [
             now.drop.eq(head_valid & ~head.first),      # a beat without a start of frame
             now.can_start.eq(can_start),
@@ -355,13 +362,15 @@ class NpStereoCore(wiring.Component):
             # queue's head through the admission into the line buffers' read address (a
             # register by the block RAMs) was census 7x7 box's critical path at 640 x 480
             # (11.36 ns, 5.79 of it one wire). The stage raises switch_pending three clocks
-            # after a start reaches it; the clock it now comes later is held here (3x1
-            # frames back to back catch it, tests/test_hdl_core.py).
+            # after a start reaches it, and the admission sees it a clock later still; the
+            # two clocks they come later are held here (3x1 frames back to back catch it,
+            # tests/test_hdl_core.py).
             latched = Signal(proposal, name="decision_input")
             m.d.sync += latched.eq(handed)
             handed = latched
-            m.d.comb += start_held.eq(pipe(m, handed.admit & handed.start, 2, "start_late",
-                                           reset=True))
+            started = pipe(m, handed.admit & handed.start, 2, "start_late", reset=True)
+            m.d.comb += start_held.eq(started | pipe(m, started, 1, "start_later",
+                                                     reset=True))
         # The credits and the count of frames in flight sit by the output: they take the
         # decision a clock late, through a register of its own (a copy loaded from the
         # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5). With R >= 2
