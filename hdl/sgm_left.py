@@ -286,15 +286,25 @@ def _lane_update(owner, m, reference, fresh_at, column):
         candidates = [centre[i], neighbours[i], neighbours[i + 2], reference[i]]
         beats, choose = minimum(candidates, bits, small[i])
         if t.left_stages >= 2:
-            # Compare (the winner's one-hot flags: each a LUT behind the comparisons'
-            # carry chains, as their gating by ``small`` was), then choose (and add): the
-            # loop has R - 1 >= 2 clocks to spare. The comparisons registered and the
-            # flags formed in the choice's clock were census 7x7 SGM's critical path at
-            # R = 10 (6.78 ns, 3 levels).
-            wins = [register(m, w, 1, f"sgm_left_wins{i}_{k}")
-                    for k, w in enumerate(winners(beats))]
-            candidates = [register(m, c, bits, f"sgm_left_cand{i}_{k}")
-                          for k, c in enumerate(candidates)]
+            # Compare, then choose (and add): the loop has R - 1 >= 2 clocks to spare.
+            # Where the comparisons' clock has nothing in front of them (R >= 5) the
+            # winner's one-hot flags are registered, each a LUT behind three carry chains:
+            # the comparisons registered and the flags formed in the choice's clock were
+            # census 7x7 SGM's critical path at R = 10 (6.78 ns, 3 levels). At R = 3, 4 the
+            # just-written word's multiplexer comes first, and the flags there were census
+            # 5x5 SGM's critical path at 1280 x 720, R = 4 (7.67 ns, 12 cells; 130.3 MHz
+            # against 150.1 with the comparisons registered).
+            def registered(values):
+                return [register(m, c, bits, f"sgm_left_cand{i}_{k}")
+                        for k, c in enumerate(values)]
+            if just_written is None:
+                wins = [register(m, w, 1, f"sgm_left_wins{i}_{k}")
+                        for k, w in enumerate(winners(beats))]
+                candidates = registered(candidates)
+            else:
+                candidates = registered(candidates)
+                wins = winners({key: register(m, b, 1, f"sgm_left_beats{i}_{key[0]}{key[1]}")
+                                for key, b in beats.items()})
             best = pick(candidates, wins, bits)
         else:
             best = choose(beats)
