@@ -224,8 +224,9 @@ def test_memory_formula_counts_the_term(monkeypatch):
     formula that ``npstereo report`` compares with Yosys: it holds the bits of the memories
     the elaborated core makes (Yosys found the same, 4212 bits, docs/sgm.md, when the left
     path's two stores were LUT RAM at R = 2; shifting registers now, 80 bits fewer; 4402 with
-    the SGM stage's delay lines in LUT RAM), and a formula without the term's store bits
-    does not."""
+    the SGM stage's delay lines in LUT RAM; 4722 since the L/R check's exit register
+    lengthened the pipeline by a clock and the output queue doubled to 64 words), and a
+    formula without the term's store bits does not."""
     from npstereo.hdl import plan_memories
     from npstereo.hdl.verilog import core_verilog
 
@@ -233,7 +234,7 @@ def test_memory_formula_counts_the_term(monkeypatch):
     made = record_memories(monkeypatch)
     core_verilog(params)
     elaborated = sum(Shape.cast(memory.shape).width * memory.depth for memory in made)
-    assert elaborated == plan_memories.memory_bits(params) == 4402
+    assert elaborated == plan_memories.memory_bits(params) == 4722
     kinds = {memory.name: memory for memory in plan_memories.memories(params)}
     assert kinds["cost term histories"].bits == 3 * 2 * 2 * 7
     assert kinds["right-transform stores"].width == params.transform_bits + 24
