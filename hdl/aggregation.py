@@ -25,19 +25,13 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .banks import choose_bank
-from .common import SlotClock, Store, bits_for, pipe, replica, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, replica, row_bounds, tag_layout
 from .plan_structure import (bank_choice_levels, cost_banks, horizontal_plan,
                              vertical_bits, vertical_plan)
 from .plan_timing import aggregation_latency, unit_skews, vertical_clocks
 from .trees import DEFAULT_EVERY, build_sum
 
 __all__ = ["Aggregation"]
-
-
-def _row_above_inside(y, above, height):
-    """The row ``above`` rows above the newest row ``y`` (row y - above) lies in the
-    frame."""
-    return (y >= above) & (y < height + above)
 
 
 def _below(value, bound):
@@ -147,7 +141,8 @@ class Aggregation(wiring.Component):
         # computed, for the rows below may belong to the next frame (see the calculation
         # stage).
         inside = [Signal(name=f"row_ok{k}") for k in range(rows + 1)]
-        m.d.sync += [ok.eq(_row_above_inside(tag.y, k, p.height)) for k, ok in enumerate(inside)]
+        m.d.sync += [ok.eq(low & high) for ok, (low, high) in
+                     zip(inside, (row_bounds(tag.y, k, p.height) for k in range(rows + 1)))]
         # Each level of the bank's choice beyond the first is a clock more to the word.
         later = bank_choice_levels(p) - 1
         # A clock short: each unit's own copy is the last register (_Chain.own).

@@ -31,7 +31,8 @@ from amaranth.lib.wiring import In, Out
 
 from .aggregation import Aggregation
 from .banks import line_memory
-from .common import SlotClock, Store, bits_for, pipe, replica, round_base, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, replica, round_base, \
+    row_inside_ahead, tag_layout
 from .cost_term import COLUMN_BITS, COST_TERM_CLOCKS, Ad3Term, right_column
 from .matching_cost import MatchingCost
 from .pair_flags import pair_flags
@@ -394,13 +395,9 @@ class CalculationStage(wiring.Component):
                 # and the aggregation masks the rows of each sum.
                 m.d.sync += ok.eq(tag.valid & tag.live)
             else:
-                # The row's two comparisons a clock ahead, from ``early``, each a register
-                # of its own: both carry chains and the ANDs in one clock were census 5x5's
-                # critical path at 1920 x 1080 on ECP5 (6.96 ns, 16 cells).
-                above = Signal(name=f"cost_row_above{k}")
-                below = Signal(name=f"cost_row_below{k}")
-                m.d.sync += [above.eq(early.y >= k), below.eq(early.y < p.height + k),
-                             ok.eq(tag.valid & tag.live & above & below)]
+                # The row's comparisons a clock ahead, from ``early``.
+                inside = row_inside_ahead(m, early.y, k, p.height, "cost_row", str(k))
+                m.d.sync += ok.eq(tag.valid & tag.live & inside)
             ok = pipe(m, ok, self.costed - start - 1, f"cost_row_ok{k}")
             # One tap per skew: the chain of unit 0's flags, a register per step.
             taps = [ok]

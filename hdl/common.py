@@ -21,8 +21,8 @@ from amaranth.lib.memory import Memory
 
 __all__ = ["bits_for", "tag_layout", "y_range", "delay_line", "delay_line_rings",
            "DELAY_LINE_MIN", "DELAY_LINE_BITS", "pipe", "delay", "round_base", "SlotClock",
-           "Store", "LaneStores", "ShiftStore", "column_inside", "better", "absolute_difference",
-           "split_lanes"]
+           "Store", "LaneStores", "ShiftStore", "column_inside", "row_bounds", "row_inside_ahead",
+           "better", "absolute_difference", "split_lanes"]
 
 
 def bits_for(maximum):
@@ -463,6 +463,19 @@ def column_inside(x, offset, width):
     if offset < 0:
         return x >= -offset
     return x < width - offset if offset > 0 else Const(1)
+
+
+def row_bounds(y, above, height):
+    """Row ``y - above`` lies in the frame: ``y >= above`` and ``y < height + above``."""
+    return y >= above, y < height + above
+
+
+def row_inside_ahead(m, y, above, height, name, suffix=""):
+    """:func:`row_bounds` a clock after ``y``, each a register, ANDed in the reader's clock
+    (both carry chains and the AND in one clock: census 5x5 box on ECP5, 6.96-7.23 ns)."""
+    low, high = (register(m, bound, 1, f"{name}_{side}{suffix}")
+                 for side, bound in zip(("above", "below"), row_bounds(y, above, height)))
+    return low & high
 
 
 def better(candidate, best):

@@ -26,7 +26,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .common import SlotClock, Store, better, bits_for, control_copies, each_unit, pipe, \
-    register, replica, round_base, tag_layout
+    register, replica, round_base, row_inside_ahead, tag_layout
 from .plan_timing import LR_STAGE_A, lr_stage_b, lr_timing
 
 #: Units served by one copy of the candidates' column and frame flag.
@@ -178,12 +178,8 @@ class LRCheck(wiring.Component):
         # one register for all 64 units' comparisons was census 5x5's critical path at
         # 1280 x 720, D = 64, R = 1 (6.2 ns of routing to the farthest unit, ECP5).
         difference = tag.x - round_base(m, slots, 1, units)
-        # The row's comparisons with the frame a clock ahead, from the input tag, each a
-        # register of its own: in the clock of the flag's copies they were census 5x5's
-        # critical path at 1280 x 720, D = 64, R = 1 (7.23 ns, 8 cells).
-        above = register(m, self.tag.y >= 0, 1, "lr_row_above")
-        below = register(m, self.tag.y < p.height, 1, "lr_row_below")
-        framed = tag.valid & tag.live & above & below
+        # The row's comparisons with the frame a clock ahead, from the input tag.
+        framed = tag.valid & tag.live & row_inside_ahead(m, self.tag.y, 0, p.height, "lr_row")
         copies = range(-(-units // LR_UNITS_PER_COPY))
         x_minus_base = [replica(m, difference, f"lr_x_minus_base{k}",
                                 Shape.cast(range(-p.disparities, p.width)),

@@ -297,6 +297,7 @@ def _lane_update(owner, m, reference, fresh_at, column):
             def registered(values):
                 return [register(m, c, bits, f"sgm_left_cand{i}_{k}")
                         for k, c in enumerate(values)]
+            # (Each branch makes its registers in the order of the netlists measured.)
             if just_written is None:
                 wins = [register(m, w, 1, f"sgm_left_wins{i}_{k}")
                         for k, w in enumerate(winners(beats))]

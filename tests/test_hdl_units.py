@@ -570,7 +570,8 @@ def test_aggregation_matches_golden(transform, aggregation, disparities, rounds,
 
 def test_broken_aggregation_row_mask_is_caught(monkeypatch):
     """Rows above the frame not masked: the previous frame's rows leak into the sums."""
-    monkeypatch.setattr(hdl_aggregation, "_row_above_inside", lambda y, above, height: 1)
+    monkeypatch.setattr(hdl_aggregation, "row_bounds",
+                        lambda y, above, height: (Const(1), Const(1)))
     with pytest.raises(AssertionError, match="sums differ"):
         check_aggregation(StereoParams(transform="census", block=3, disparities=6, rounds=2,
                                        width=9, height=6, line_buffer="costs"), seed=1)

@@ -22,7 +22,7 @@ from ..atomic import write_text
 from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
     task_key
 from ..flow.capacity import DEFAULT_DEVICE
-from ..flow.nextpnr import PLACEMENT_RANGES, Placement
+from ..flow.nextpnr import PLACEMENT_RANGES, Placement, out_of_range
 from ..flow.tools import TARGETS, tool_versions
 from ..reports.cache import earlier_reports, seed_cache, source_hash
 from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
@@ -237,10 +237,9 @@ def _check(args):
         value = getattr(args, _placement_dest(option))
         if value is None:
             continue
-        low, high = PLACEMENT_RANGES[field]
-        if not low <= value <= high:
-            raise UserError(f"{option} must be a whole number from {low} to {high}, not "
-                            f"{value}")
+        message = out_of_range(field, value, option)
+        if message is not None:
+            raise UserError(message)
         if not args.pnr:
             raise UserError(f"{option} is {what}: it needs --pnr")
         if sweep is not None:

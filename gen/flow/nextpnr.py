@@ -17,12 +17,21 @@ from .logs import nextpnr_timing
 from .processes import run_tool
 from .tools import find_tool
 
-__all__ = ["CLOCK_PIN", "PLACEMENT_RANGES", "Placement", "place_and_route"]
+__all__ = ["CLOCK_PIN", "PLACEMENT_RANGES", "Placement", "out_of_range", "place_and_route"]
 
 #: Allowed values of each of :class:`Placement`'s choices: nextpnr reads ``--seed`` as a C
 #: int; its placer takes any int as its timing weight, but 0 would place without timing
 #: and weights beyond 100 were not tried (docs/synthesis-flow.md).
 PLACEMENT_RANGES = {"seed": (0, 2**31 - 1), "timing_weight": (1, 100)}
+
+
+def out_of_range(field, value, name):
+    """The message for ``value`` of :class:`Placement`'s ``field`` (given as ``name``) out
+    of :data:`PLACEMENT_RANGES`, or None."""
+    low, high = PLACEMENT_RANGES[field]
+    if value is not None and not low <= value <= high:
+        return f"{name} must be a whole number from {low} to {high}, not {value}"
+    return None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,11 +46,10 @@ class Placement:
     timing_weight: int | None = None
 
     def __post_init__(self):
-        for field, (low, high) in PLACEMENT_RANGES.items():
-            value = getattr(self, field)
-            if value is not None and not low <= value <= high:
-                raise ValueError(f"Placement {field} must be a whole number from {low} to "
-                                 f"{high}, not {value}")
+        for field in PLACEMENT_RANGES:
+            message = out_of_range(field, getattr(self, field), f"Placement {field}")
+            if message is not None:
+                raise ValueError(message)
 
     def arguments(self):
         """nextpnr's arguments for these choices."""
