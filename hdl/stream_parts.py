@@ -12,6 +12,11 @@ from amaranth.lib.wiring import In, Out
 __all__ = ["InputQueue", "RegisterSlice"]
 
 
+def _next_entries(word, entries, enables):
+    """The queue's entries as they will be a clock later."""
+    return [Mux(enable, word, entry) for entry, enable in zip(entries, enables)]
+
+
 class InputQueue(wiring.Component):
     """A queue behind input pins: the beats are registered twice, then kept in ``depth``
     register entries addressed by pointers.
@@ -25,6 +30,11 @@ class InputQueue(wiring.Component):
     lanes : list of (int, int)
         Bit ranges ``[low, high)`` of the payload that go different ways in the consumer,
         covering every bit once; each has pointers and write enables of its own.
+    registered_heads : iterable of int
+        Indexes into ``lanes`` whose part of the head is a register, loaded a clock ahead
+        with the entry the read pointer will show (the next one on a pop): a consumer
+        whose pop depends on those bits then starts from a flip-flop, not from the read
+        pointer's multiplexer.
 
     Members
     -------
@@ -39,7 +49,7 @@ class InputQueue(wiring.Component):
         of the read pointers and of every level flag.
     """
 
-    def __new__(cls, shape, depth, lanes):
+    def __new__(cls, shape, depth, lanes, registered_heads=()):
         # Refused before the object exists: a component that raises in __init__ is garbage
         # that Amaranth reports as created but never used. ``src_loc_at`` keeps the report
         # of a queue really left unused at the caller's line.
@@ -48,10 +58,15 @@ class InputQueue(wiring.Component):
         bits = sorted(bit for low, high in lanes for bit in range(low, high))
         if bits != list(range(Shape.cast(shape).width)):
             raise ValueError(f"lanes {lanes} must cover every bit of the payload once")
+        unknown = sorted(set(registered_heads) - set(range(len(lanes))))
+        if unknown:
+            raise ValueError(f"registered_heads {unknown} must index lanes "
+                             f"(0 to {len(lanes) - 1})")
         return super().__new__(cls, src_loc_at=1)
 
-    def __init__(self, shape, depth, lanes):
+    def __init__(self, shape, depth, lanes, registered_heads=()):
         self._shape, self._depth, self._lanes = shape, depth, list(lanes)
+        self._registered_heads = set(registered_heads)
         super().__init__({"sink": In(stream.Signature(shape)),
                           "source": Out(stream.Signature(shape))})
 
@@ -104,16 +119,37 @@ class InputQueue(wiring.Component):
             with m.If(pop):
                 m.d.sync += read.eq(read + 1)
             entries = [Signal(high - low, name=f"entry{k}_{lane}") for k in range(depth)]
-            for k, entry in enumerate(entries):
-                enable = Signal(name=f"entry{k}_{lane}_write")
+            enables = [Signal(name=f"entry{k}_{lane}_write") for k in range(depth)]
+            for k, (entry, enable) in enumerate(zip(entries, enables)):
                 m.d.sync += enable.eq(push_next & (next_write == k))
                 with m.If(enable):
                     m.d.sync += entry.eq(word[low:high])
-            with m.Switch(read):
-                for k, entry in enumerate(entries):
-                    with m.Case(k):
-                        m.d.comb += head[low:high].eq(entry)
+            if lane in self._registered_heads:
+                # The entries as they will be next clock, at the read pointer and after it:
+                # the pop only chooses between the two.
+                written = _next_entries(word[low:high], entries, enables)
+                current = self._select(m, read, written, f"head{lane}_current")
+                following = self._select(m, read, written[1:] + written[:1],
+                                         f"head{lane}_following")
+                ahead = Signal(high - low, name=f"head{lane}")
+                m.d.sync += ahead.eq(Mux(pop, following, current))
+                m.d.comb += head[low:high].eq(ahead)
+            else:
+                with m.Switch(read):
+                    for k, entry in enumerate(entries):
+                        with m.Case(k):
+                            m.d.comb += head[low:high].eq(entry)
         return m
+
+    @staticmethod
+    def _select(m, index, values, name):
+        """``values[index]``, a multiplexer of its own."""
+        chosen = Signal(len(values[0]), name=name)
+        with m.Switch(index):
+            for k, value in enumerate(values):
+                with m.Case(k):
+                    m.d.comb += chosen.eq(value)
+        return chosen
 
 
 class RegisterSlice(wiring.Component):

@@ -9,12 +9,14 @@ loses a lane) must fail the same checks.
 """
 
 import random
+import re
 
 import pytest
 from amaranth.hdl import Module, Signal
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from npstereo.hdl import stream_parts
 from npstereo.hdl.stream_parts import InputQueue, RegisterSlice
 
 from hdl_helpers import refused_quietly, simulate
@@ -27,13 +29,25 @@ def queue():
     return InputQueue(WIDTH, DEPTH, LANES)
 
 
+def queue_registered_framing():
+    """The core's queue at R = 1: the framing lane's head is a register."""
+    return InputQueue(WIDTH, DEPTH, LANES, registered_heads=[2])
+
+
+def queue_registered_heads():
+    return InputQueue(WIDTH, DEPTH, LANES, registered_heads=range(len(LANES)))
+
+
 def register_slice():
     return RegisterSlice(WIDTH)
 
 
 #: Each part, and whether its consumer asserts ``ready`` only while ``valid`` (the input
 #: queue's rule; the register slice takes any consumer).
-PARTS = {"queue": (queue, True), "slice": (register_slice, False)}
+PARTS = {"queue": (queue, True), "queue, framing head registered":
+         (queue_registered_framing, True), "queue, heads registered":
+         (queue_registered_heads, True), "slice": (register_slice, False)}
+QUEUES = [name for name in PARTS if name.startswith("queue")]
 
 
 def run(dut, beats, *, ready_waits_for_valid, idle=0.0, backpressure=0.0, seed=0,
@@ -124,13 +138,14 @@ def check_capacity(make, ready_waits_for_valid, capacity):
     assert result["received"] == beats
 
 
-@pytest.mark.parametrize("part,latency", [("queue", 3), ("slice", 1)])
+@pytest.mark.parametrize("part,latency", [*((name, 3) for name in QUEUES), ("slice", 1)])
 def test_full_rate(part, latency):
     """Without idle cycles or backpressure a beat per clock, after the part's latency."""
     check_full_rate(*PARTS[part], latency)
 
 
-@pytest.mark.parametrize("part,capacity", [("queue", DEPTH), ("slice", 2)])
+@pytest.mark.parametrize("part,capacity", [*((name, DEPTH) for name in QUEUES),
+                                           ("slice", 2)])
 def test_holds_its_capacity_while_stalled(part, capacity):
     """A source that always offers and a sink that takes nothing for 30 clocks: the part
     takes exactly as many beats as it holds, then hands all of them on in order."""
@@ -144,6 +159,8 @@ def test_queue_parameters_are_checked():
     for lanes in ([(0, 8), (8, 16)], [(0, 10), (8, 18)]):
         refused_quietly(lambda: InputQueue(WIDTH, DEPTH, lanes), ValueError,
                         "cover every bit of the payload once")
+    refused_quietly(lambda: InputQueue(WIDTH, DEPTH, LANES, registered_heads=[1, 3, -1]),
+                    ValueError, re.escape("registered_heads [-1, 3] must index lanes (0 to 2)"))
 
 
 # Deliberately wrong components must fail the checks above -----------------------------
@@ -218,6 +235,15 @@ def test_broken_parts_lose_beats(broken, waits):
         check_scenario(broken, waits, "burst", 0.0, 0.5)
     with pytest.raises(AssertionError):
         check_scenario(broken, waits, "sink paused at start", 0.0, 0.0)
+
+
+@pytest.mark.parametrize("part", ["queue, framing head registered", "queue, heads registered"])
+def test_broken_registered_head_is_caught(part, monkeypatch):
+    """A registered head loaded from the entries as they are, not as they will be: a beat
+    written in the clock the head moves onto its entry is missed."""
+    monkeypatch.setattr(stream_parts, "_next_entries", lambda word, entries, enables: entries)
+    with pytest.raises(AssertionError, match="received|changed or was withdrawn"):
+        check_scenario(*PARTS[part], "burst", 0.5, 0.5)
 
 
 def test_broken_lane_is_caught():
