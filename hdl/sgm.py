@@ -279,9 +279,13 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
         # register of their own: the slot's valid tap into both bases' enables was census
         # 7x7 SGM's path at R = 10 (6.64-7.27 ns) and census 5x5's at 1280 x 720, R = 4.
         step = replica(m, slots.first(0) & self._valid_at(0), "sgm_row_base_step")
+        # The next column's base needs no restart at a first column (after a reset in
+        # mid-row): only the top-right reads use it, which are fresh in row 0, and row 0
+        # ends at its last column. The restart into it was census 5x5 SGM's path at
+        # 1280 x 720, R = 4 again (6.74 ns, 2 levels).
         with m.If(step):
             m.d.sync += [own.eq(Mux(first_column, 0, own + rounds)),
-                         nxt.eq(Mux(last_column, 0, Mux(first_column, rounds, nxt + rounds)))]
+                         nxt.eq(Mux(last_column, 0, nxt + rounds))]
         # The address at 3, the read at 4, the RAM's output register at 5, then the levels
         # of the bank's choice: the word at 5 + t.rows - SGM_ROW_CLOCKS.
         word_at = 5 + t.rows - SGM_ROW_CLOCKS

@@ -372,15 +372,19 @@ def test_core_matches_golden(transform, block, disparities, rounds, p1, p2, adap
 SCENARIO = sgm_params("census", 3, 8, 8, 3, 20, 2, width=14, height=5)
 
 
-def test_core_reset_misframing_and_frames_back_to_back():
-    """A reset in mid-frame, a frame whose second line ends early (a framing error, the
-    rest filled), then two frames that overlap in the pipeline (the second's first rows
-    come in while the first's last rows are computed): both bit-exact."""
+@pytest.mark.parametrize("reset_at", [30, 75], ids=["before the stage's first row",
+                                                    "in the stage's fourth row"])
+def test_core_reset_misframing_and_frames_back_to_back(reset_at):
+    """A reset in mid-frame (before the SGM stage has a row, or in the middle of one: its
+    row bases must restart at the next frame's first column), a frame whose second line
+    ends early (a framing error, the rest filled), then two frames that overlap in the
+    pipeline (the second's first rows come in while the first's last rows are computed):
+    both bit-exact."""
     first, second = stereo_pair("layers", 5, 14, 7), stereo_pair("independent", 5, 14, 8)
     misframed = frame_beats(*second)
     data, user, _ = misframed[14 + 5]
     misframed[14 + 5] = (data, user, True)
-    beats = frame_beats(*first)[:30] + [RESET] + misframed + frame_beats(*first) \
+    beats = frame_beats(*first)[:reset_at] + [RESET] + misframed + frame_beats(*first) \
         + frame_beats(*second)
     result = check_frames(SCENARIO, [first, second], beats, valid_prob=GAPS,
                           ready_prob=GAPS, seed=3)
