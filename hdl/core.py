@@ -38,6 +38,7 @@ from amaranth.lib.wiring import In, Out
 
 from .calculation_stage import CalculationStage
 from .common import SlotClock, pipe
+from .credits import credit_flag
 from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
@@ -192,37 +193,12 @@ class NpStereoCore(wiring.Component):
             word.first.eq(words.frame_start), word.last.eq(words.line_end),
         ]
         admit = Signal()        # the decision of this clock: the next slot has a position
-        credit_taken = Signal()  # the same, a clock late with R >= 2 (see below)
-        credits = Signal(range(self.queue_depth + 1), init=self.queue_depth)
-        has_credit = Signal(init=1)
-        # Credits come back when a word leaves the queue or a position retires without
-        # one. Both sums (with and without this clock's admission) are formed beside the
-        # admission logic, which then only chooses between them: the decision is the
-        # longest logic of the core, and an adder behind it cost 11 ns on ECP5 (even as a
-        # register, in front of one adder of returned minus taken: census 9x9, 7.5 ns).
-        # The flag the decision reads is registered from the counter itself, a clock late
-        # (see _has_room), so no comparison follows the sums.
-        # The credits coming back are counted two clocks late (which is only more
-        # cautious, plan_timing.CREDIT_RETURN), from registers at both ends: the queue's
-        # read and the L/R check's retire are registered apart (their logic into one sum
-        # was three LUTs from the queue's r_rdy, 6.84 ns, census 5x5 box at 1280 x 720,
-        # R = 1; through the FIFO's read, census 9x9: 9.6 ns), and their sum is registered
-        # as itself and less the credit a position takes, so that the counter's two sums
-        # are one adder each, side by side (one adder behind the other: 6.84 ns, the same
-        # core on another placement).
-        popped = pipe(m, out_slice.sink.valid & out_slice.sink.ready, 1, "credit_popped",
-                      reset=True)
-        retired = pipe(m, words.retire & ~words.produce, 1, "credit_retired", reset=True)
-        returning = Signal(2)
-        m.d.comb += returning.eq(popped + retired)
-        back = Signal(2, name="credits_back")
-        back_less_one = Signal(range(-1, 2), name="credits_back_less_one", init=-1)
-        m.d.sync += [back.eq(returning), back_less_one.eq(returning - 1)]
-        kept = Signal(range(self.queue_depth + 3), name="credits_kept")
-        taken = Signal(range(-1, self.queue_depth + 2), name="credits_taken")
-        m.d.comb += [kept.eq(credits + back), taken.eq(credits + back_less_one)]
-        m.d.sync += [credits.eq(Mux(credit_taken, taken, kept)),
-                     has_credit.eq(_has_room(credits))]
+        credit_taken = Signal()  # the same, a clock late (see below)
+        # The queue's room: the credits, and the flag the decision reads.
+        has_credit = credit_flag(
+            m, self.queue_depth, rounds, credit_taken,
+            popped=out_slice.sink.valid & out_slice.sink.ready,
+            retired=words.retire & ~words.produce)
 
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
@@ -377,13 +353,12 @@ class NpStereoCore(wiring.Component):
                                                      reset=True))
         # The credits and the count of frames in flight sit by the output: they take the
         # decision a clock late, through a register of its own (a copy loaded from the
-        # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5). With R >= 2
-        # decisions are two clocks apart or more, so the next decision still sees every
-        # earlier one but the last, as _has_room assumes; a frame's count starts a clock
-        # late, long before its flush can end.
-        late = 1 if rounds > 1 else 0
-        taking = pipe(m, chosen.admit, late, "credit_taken", reset=True)
-        starting = pipe(m, chosen.admit & chosen.start, late, "frame_started", reset=True)
+        # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5; at R = 1 the
+        # decision straight into the credits, 7-8 ns). _unseen_decisions counts the
+        # decisions the credit flag has not seen; a frame's count starts a clock late,
+        # long before its flush can end.
+        taking = pipe(m, chosen.admit, 1, "credit_taken", reset=True)
+        starting = pipe(m, chosen.admit & chosen.start, 1, "frame_started", reset=True)
         take = chosen.take        # the admitted position is the head pixel (else zeros)
         error = Signal()
         m.d.sync += self.framing_error.eq(error)
@@ -486,12 +461,6 @@ class _Words:
     frame_start: Signal
     line_end: Signal
     frame_end: Signal
-
-
-def _has_room(credits):
-    """Whether the output queue is sure to take the word of one more position in the next
-    clock: at most one credit is taken per clock, so two now leave at least one then."""
-    return credits >= 2
 
 
 #: Entries of the input queue (a power of two: its pointers wrap by themselves).

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from npstereo.hdl import core as core_module
+from npstereo.hdl import credits as credits_module
 from npstereo.hdl import common, evaluation_stage, input_stage, lr_check, plan_structure, \
     trees, window_centre
 from npstereo.hdl.core import NpStereoCore
@@ -437,11 +438,11 @@ def test_broken_window_column_mask_is_caught(monkeypatch):
                                lr_threshold=None, width=20, height=8), NOISE, ABORTED)
 
 
-@pytest.mark.parametrize("rounds", [2, 3, 4])
+@pytest.mark.parametrize("rounds", [1, 2, 3, 4])
 def test_credits_hold_under_slow_sink(rounds):
-    """With R >= 2 the credits are taken a clock after the decision: a sink far slower
-    than the core (a word per R clocks against 0.1 taken per clock) fills the output
-    queue, and no word may be lost."""
+    """The credits are taken a clock after the decision (and at R = 1 reach it through
+    two registers): a sink far slower than the core (a word per R clocks against 0.1
+    taken per clock) fills the output queue, and no word may be lost."""
     check_frames(StereoParams(transform="census", block=3, disparities=4 * rounds,
                               rounds=rounds, lr_threshold=None, width=20, height=8),
                  [TIES], frame_beats(*TIES), ready_prob=0.1)
@@ -462,7 +463,16 @@ def test_late_credit_is_caught(monkeypatch):
 
 def test_broken_credit_is_caught(monkeypatch):
     """Admission that ignores the output queue's room loses words under backpressure."""
-    monkeypatch.setattr(core_module, "_has_room", lambda credits: 1)
+    monkeypatch.setattr(credits_module, "_has_room", lambda credits, unseen: 1)
     assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
                                lr_threshold=None, width=20, height=8),
                   ready_prob=0.3)
+
+
+def test_broken_unseen_decisions_are_caught(monkeypatch):
+    """At R = 1 three decisions are on their way to the credit flag: a flag that counts
+    one, as at R >= 2, lets the queue overflow under backpressure."""
+    monkeypatch.setattr(credits_module, "_unseen_decisions", lambda rounds: 1)
+    assert_caught(StereoParams(transform="census", block=3, disparities=8, rounds=1,
+                               lr_threshold=None, width=20, height=8),
+                  ready_prob=0.1)
