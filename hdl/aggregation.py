@@ -25,7 +25,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .banks import choose_bank
-from .common import SlotClock, Store, bits_for, pipe, replica, row_bounds, tag_layout
+from .common import SlotClock, Store, bits_for, pipe, register, replica, row_bounds, tag_layout
 from .plan_structure import (bank_choice_levels, cost_banks, horizontal_plan,
                              vertical_bits, vertical_plan)
 from .plan_timing import aggregation_latency, unit_skews, vertical_clocks
@@ -70,6 +70,8 @@ class Aggregation(wiring.Component):
         outside the frame) or vertical sum (``"transforms"``).
     tag : In(tag_layout)
         The newest position, slot-aligned at this stage's input.
+    tag_ahead : In(tag_layout)
+        With R = 1 and a box wider than one column: ``tag`` a clock earlier.
     first, round : In
         Slot timing at the input.
     sums : Out(ArrayLayout(unsigned(aggregated_cost_bits), D/R))
@@ -91,7 +93,10 @@ class Aggregation(wiring.Component):
         self.horizontal_latency = arithmetic - self.vertical_latency
         self.latency = arithmetic + self.skews[-1]
         units = params.per_round
-        super().__init__({
+        #: The row taps' masks are formed from the tag a clock ahead (see _horizontal).
+        self.masks_ahead = a > 0 and params.rounds == 1
+        ahead = {"tag_ahead": In(tag_layout(params))} if self.masks_ahead else {}
+        super().__init__({**ahead,
             "costs": In(data.ArrayLayout(unsigned(in_bits), units)),
             "tag": In(tag_layout(params)),
             "first": In(1), "round": In(bits_for(params.rounds - 1)),
@@ -105,11 +110,15 @@ class Aggregation(wiring.Component):
         slots = SlotClock(m, self.first, self.round, p.rounds, "aggregation", self.slot_base)
         values = [self.costs[i] for i in range(p.per_round)]
         tag = self.tag
+        ahead = self.tag_ahead if self.masks_ahead else None
         if self.from_costs:
             values = self._vertical(m, slots, values)
             tag = slots.delay(tag, 0, self.vertical_latency, "vertical_tag")
+            if ahead is not None:
+                ahead = slots.delay(ahead, 0, self.vertical_latency, "vertical_tag_ahead")
         if p.agg_radius:
-            values, tag = self._horizontal(m, slots, values, tag, self.vertical_latency)
+            values, tag = self._horizontal(m, slots, values, tag, self.vertical_latency,
+                                           ahead)
         last = self.skews[-1]
         values = [pipe(m, v, last - skew, f"aligned_sum{i}")
                   for i, (v, skew) in enumerate(zip(values, self.skews))]
@@ -190,8 +199,9 @@ class Aggregation(wiring.Component):
             sums.append(total[:vertical_bits(p)])
         return sums
 
-    def _horizontal(self, m, slots, values, tag, offset):
-        """Row sums over the positions x - 2a .. x, reported for the centre x - a."""
+    def _horizontal(self, m, slots, values, tag, offset, ahead=None):
+        """Row sums over the positions x - 2a .. x, reported for the centre x - a
+        (``ahead``: the tag a clock earlier, or None)."""
         p = self.params
         a, width, rounds = p.agg_radius, p.width, p.rounds
         bits = len(values[0])
@@ -212,6 +222,13 @@ class Aggregation(wiring.Component):
         # Formed a clock ahead of the taps: each unit's own copy is the register in front of
         # its masks (_Chain.own).
         keep = [_tap_inside(newest_x, k, a) for k in range(2 * a + 1)]
+        if ahead is not None:
+            # At R = 1 the units of one skew are many (9 at D = 64), and the first skew's
+            # own copies were loaded from the comparisons on the tag: the tag into them was
+            # census 5x5 box's critical path at 1920 x 1080 (7.56 ns, 3 levels). So the
+            # comparisons are made a clock ahead, into one register the copies load from.
+            keep = [register(m, _tap_inside(ahead.x, k, a), 1, f"column_ok_ahead{k}")
+                    for k in range(2 * a + 1)]
         control = _Chain(m, self.skews, "row_taps")
         masks = _Chain(m, self.skews, "column_ok")
         sums = []

@@ -171,6 +171,9 @@ class CalculationStage(wiring.Component):
                              "aggregation_tag")
         m.d.comb += [aggregation.tag.eq(newest), aggregation.first.eq(slots.first(self.vertical)),
                      aggregation.round.eq(slots.round(self.vertical))]
+        if not p.is_sgm and aggregation.masks_ahead:
+            m.d.comb += aggregation.tag_ahead.eq(slots.delay(
+                early, self.stored, self.vertical - self.stored - 1, "aggregation_tag_ahead"))
         m.d.comb += [aggregation.costs[i].eq(c) for i, c in enumerate(costs)]
         if p.is_sgm:
             m.d.comb += aggregation.guide.eq(slots.delay(

@@ -519,19 +519,28 @@ def check_aggregation(params, seed, bubbles=0.3):
     # The units' costs of each clock; unit i takes its own s_i clocks late (the skew of the
     # cost units, :func:`npstereo.hdl.plan_timing.unit_skews`).
     given = []
+    total = len(clocks) + latency + rounds
+
+    def slot_at(t):
+        return clocks[t] if t < len(clocks) else (None, t % rounds)
+    # Each clock's tag (a bubble's is random), and a clock ahead for R = 1's masks.
+    tags = [{"x": stream.randrange(width), "y": stream.randrange(height), "valid": 0,
+             "live": 1} if slot_at(t)[0] is None else
+            {"x": slot_at(t)[0][1], "y": slot_at(t)[0][2], "valid": 1, "live": 1}
+            for t in range(total + 1)]
 
     async def testbench(ctx):
-        for t in range(len(clocks) + latency + rounds):
-            slot, j = clocks[t] if t < len(clocks) else (None, t % rounds)
+        for t in range(total):
+            slot, j = slot_at(t)
             ctx.set(dut.first, j == 0)
             ctx.set(dut.round, j)
+            ctx.set(dut.tag, tags[t])
+            if dut.masks_ahead:
+                ctx.set(dut.tag_ahead, tags[t + 1])
             if slot is None:
-                ctx.set(dut.tag, {"x": stream.randrange(width), "y": stream.randrange(height),
-                                  "valid": 0, "live": 1})
                 given.append([stream.randrange(params.max_cost + 1) for i in range(units)])
             else:
                 frame, x, y = slot
-                ctx.set(dut.tag, {"x": x, "y": y, "valid": 1, "live": 1})
                 given.append([inputs(frame, x, y, j * units + i) for i in range(units)])
             for i in range(units):
                 ctx.set(dut.costs[i], given[t - skews[i]][i] if t >= skews[i]
