@@ -245,14 +245,22 @@ class NpStereoCore(wiring.Component):
         # With the input stage's decision a clock late (decision_clocks, below), its
         # switch_pending rises a clock late too, and at R = 1 it is registered here again:
         # the start of those clocks holds the next one.
-        start_held = Signal(name="start_held")
-        switch_pending = inp.switch_pending
         if decision_clocks(rounds):
-            # The input stage's flag straight into the admission was census 5x5 box's
-            # critical path at 1280 x 720 and 1920 x 1080 (8.78 ns into the credits, 8.53
-            # ns into the input queue's read): a clock late it only holds a start longer.
-            switch_pending = pipe(m, switch_pending, 1, "switch_pending_late", reset=True)
-        can_start = head_valid & head.first & ~(switch_pending | start_held) & has_credit
+            # At R = 1 the decision closes a loop of one clock through the queue's pop,
+            # and what it reads from elsewhere comes through registers by it: the credit
+            # flag through a copy of its own, a clock late, and the conditions that hold
+            # back a start as one register, start_allowed (below). Straight from where
+            # they are made, each was census 5x5 box's critical path at 1280 x 720 or
+            # 1920 x 1080 in turn (has_credit, a start's hold, the input stage's
+            # switch_pending: 6.7-8.8 ns, 3-4 levels, into the queue's read pointers or
+            # the row counter). none_outstanding may not come later: a flush would end
+            # while a frame started in it is on its way to the count (3x1 frames fail).
+            start_allowed = Signal(name="start_allowed")
+            credit_far, has_credit = has_credit, pipe(m, has_credit, 1, "has_credit_near",
+                                                      reset=True)
+            can_start = head_valid & head.first & start_allowed
+        else:
+            can_start = head_valid & head.first & ~inp.switch_pending & has_credit
         m.d.comb += [
             now.drop.eq(head_valid & ~head.first),      # a beat without a start of frame
             now.can_start.eq(can_start),
@@ -344,13 +352,14 @@ class NpStereoCore(wiring.Component):
             # (11.36 ns, 5.79 of it one wire). The stage raises switch_pending three clocks
             # after a start reaches it, and the admission sees it a clock later still; the
             # two clocks they come later are held here (3x1 frames back to back catch it,
-            # tests/test_hdl_core.py).
+            # tests/test_hdl_core.py): a start decided three or four clocks before, the
+            # stage's switch_pending and the credit flag, each as of a clock before.
             latched = Signal(proposal, name="decision_input")
             m.d.sync += latched.eq(handed)
             handed = latched
-            started = pipe(m, handed.admit & handed.start, 2, "start_late", reset=True)
-            m.d.comb += start_held.eq(started | pipe(m, started, 1, "start_later",
-                                                     reset=True))
+            late = pipe(m, handed.admit & handed.start, 1, "start_late", reset=True)
+            later = pipe(m, late, 1, "start_later", reset=True)
+            m.d.sync += start_allowed.eq(~(inp.switch_pending | late | later) & credit_far)
         # The credits and the count of frames in flight sit by the output: they take the
         # decision a clock late, through a register of its own (a copy loaded from the
         # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5; at R = 1 the

@@ -49,11 +49,6 @@ def credit_flag(m, depth, rounds, taken_now, popped, retired):
     m.d.comb += [kept.eq(credits + back), taken.eq(credits + back_less_one)]
     m.d.sync += [credits.eq(Mux(taken_now, taken, kept)),
                  has_credit.eq(_has_room(credits, _unseen_decisions(rounds)))]
-    if rounds == 1:
-        # The flag crosses from the credits (by the output) to the decision (by the input)
-        # through a second register (has_credit straight into the decision and the row
-        # counter was 8.32 ns, census 5x5 box at 1280 x 720).
-        has_credit = pipe(m, has_credit, 1, "has_credit_near", reset=True)
     return has_credit
 
 
@@ -62,7 +57,9 @@ def _unseen_decisions(rounds):
 
     A decision reaches the credits a clock later (``taken_now``), the credits the flag a
     clock after that. With R >= 2 decisions are two clocks apart or more, so one is
-    unseen; with R = 1 one per clock, and the flag's second register makes three.
+    unseen; with R = 1 one per clock, and the admission's copy of the flag, a clock later
+    (hdl/core.py: the flag straight into the decision and the row counter was 8.32 ns,
+    census 5x5 box at 1280 x 720), makes three.
     """
     return 1 if rounds > 1 else 3
 

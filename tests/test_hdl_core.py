@@ -83,12 +83,13 @@ def test_two_frames_back_to_back(line_buffer):
     assert result["errors"] == 0
 
 
-@pytest.mark.parametrize("width,height", [(3, 1), (4, 1), (3, 2)])
-def test_tiny_frames_back_to_back(width, height):
+@pytest.mark.parametrize("width,height,block", [(3, 1, 3), (4, 1, 3), (3, 2, 3), (3, 1, 5)])
+def test_tiny_frames_back_to_back(width, height, block):
     """Frames of three to six pixels back to back at R = 1, without stalls: each start
     comes a few clocks after the one before, where the input stage's switch_pending (a
-    clock late behind the decision's register) has not risen yet."""
-    params = StereoParams(transform="census", block=3, disparities=2, rounds=1,
+    clock late behind the decision's register) has not risen yet; with a 5x5 window the
+    frames are shorter than its radius, and switch_pending holds the starts longer."""
+    params = StereoParams(transform="census", block=block, disparities=2, rounds=1,
                           aggregation=1, lr_threshold=None, width=width, height=height)
     pairs = [stereo_pair("independent", height, width, seed) for seed in range(5)]
     check_frames(params, pairs, [beat for pair in pairs for beat in frame_beats(*pair)],
