@@ -243,8 +243,8 @@ class NpStereoCore(wiring.Component):
             "frame_end", "credit", "flush_start", "done")})
         now = Signal(conditions)
         # With the input stage's decision a clock late (decision_clocks, below), its
-        # switch_pending rises a clock late too, and at R = 1 it is registered here again:
-        # the start of those clocks holds the next one.
+        # switch_pending rises a clock late too: at R = 1 the starts of those clocks hold
+        # the next one.
         if decision_clocks(rounds):
             # At R = 1 the decision closes a loop of one clock through the queue's pop,
             # and what it reads from elsewhere comes through registers by it: the credit
