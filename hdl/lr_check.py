@@ -77,6 +77,8 @@ def _low_comparisons(m, difference, copies_of_difference, units, copies):
                       f"lr_x_within_units{k}", reset_less=True) for k in copies]
 
     def at_least(k, i):
+        if i == 0:    # the low bits are >= 0 always (a constant comparison fails lint)
+            return above[k] | within[k]
         return above[k] | (within[k] & (copies_of_difference[k][:low_bits] >= i))
     return at_least
 
@@ -95,12 +97,17 @@ def _lookahead(m, i, early_cost, previous_cost, previous_held, held, previous_wi
     critical path at 1280 x 720, D = 64, R = 1 (a carry chain and the choice per unit,
     7.15 ns on ECP5).
     """
-    ahead = {name: register(m, better(early_cost, against), 1, f"lr_ahead_{name}{i}")
-             for name, against in (("candidate", previous_cost),
-                                   ("passed", previous_held.cost), ("kept", held.cost))}
+    against = {"candidate": previous_cost, "passed": previous_held.cost, "kept": held.cost}
+    if i == 1:
+        # Unit 0's word is never written at R = 1 (its candidate is always fresh): it
+        # stays 0, which no cost is less than (and a comparison with it fails lint).
+        del against["passed"]
+    ahead = {name: register(m, better(early_cost, value), 1, f"lr_ahead_{name}{i}")
+             for name, value in against.items()}
     won = register(m, previous_wins, 1, f"lr_won{i - 1}")
     wrote = register(m, writing, 1, f"lr_wrote{i}")
-    return Mux(wrote, Mux(won, ahead["candidate"], ahead["passed"]), ahead["kept"])
+    return Mux(wrote, Mux(won, ahead["candidate"], ahead.get("passed", Const(0))),
+               ahead["kept"])
 
 
 class LRCheck(wiring.Component):
