@@ -221,14 +221,14 @@ class Aggregation(wiring.Component):
         # Tap k holds column x_newest - k, i.e. the centre's column + (a - k).
         # Formed a clock ahead of the taps: each unit's own copy is the register in front of
         # its masks (_Chain.own).
-        keep = [_tap_inside(newest_x, k, a) for k in range(2 * a + 1)]
+        # At R = 1 the units of one skew are many (9 at D = 64), and the first skew's own
+        # copies were loaded from the comparisons on the tag: the tag into them was census
+        # 5x5 box's critical path at 1920 x 1080 (7.56 ns, 3 levels). So there the
+        # comparisons are made a clock ahead, into one register the copies load from.
+        keep = [_tap_inside(newest_x if ahead is None else ahead.x, k, a)
+                for k in range(2 * a + 1)]
         if ahead is not None:
-            # At R = 1 the units of one skew are many (9 at D = 64), and the first skew's
-            # own copies were loaded from the comparisons on the tag: the tag into them was
-            # census 5x5 box's critical path at 1920 x 1080 (7.56 ns, 3 levels). So the
-            # comparisons are made a clock ahead, into one register the copies load from.
-            keep = [register(m, _tap_inside(ahead.x, k, a), 1, f"column_ok_ahead{k}")
-                    for k in range(2 * a + 1)]
+            keep = [register(m, ok, 1, f"column_ok_ahead{k}") for k, ok in enumerate(keep)]
         control = _Chain(m, self.skews, "row_taps")
         masks = _Chain(m, self.skews, "column_ok")
         sums = []

@@ -195,10 +195,11 @@ class NpStereoCore(wiring.Component):
         admit = Signal()        # the decision of this clock: the next slot has a position
         credit_taken = Signal()  # the same, a clock late (see below)
         # The queue's room: the credits, and the flag the decision reads.
-        has_credit = credit_flag(
+        credit = credit_flag(
             m, self.queue_depth, rounds, credit_taken,
             popped=out_slice.sink.valid & out_slice.sink.ready,
             retired=words.retire & ~words.produce)
+        has_credit = credit.flag
 
         # Frames started whose last word is not queued yet: a flush ends when none is left
         # (frames shorter than the pipeline may overlap the flush of the one before).
@@ -248,7 +249,7 @@ class NpStereoCore(wiring.Component):
         if decision_clocks(rounds):
             # At R = 1 the decision closes a loop of one clock through the queue's pop,
             # and what it reads from elsewhere comes through registers by it: the credit
-            # flag through a copy of its own, a clock late, and the conditions that hold
+            # flag through a copy of its own (credit_flag), and the conditions that hold
             # back a start as one register, start_allowed (below). Straight from where
             # they are made, each was census 5x5 box's critical path at 1280 x 720 or
             # 1920 x 1080 in turn (has_credit, a start's hold, the input stage's
@@ -256,8 +257,6 @@ class NpStereoCore(wiring.Component):
             # the row counter). none_outstanding may not come later: a flush would end
             # while a frame started in it is on its way to the count (3x1 frames fail).
             start_allowed = Signal(name="start_allowed")
-            credit_far, has_credit = has_credit, pipe(m, has_credit, 1, "has_credit_near",
-                                                      reset=True)
             can_start = head_valid & head.first & start_allowed
         else:
             can_start = head_valid & head.first & ~inp.switch_pending & has_credit
@@ -359,7 +358,7 @@ class NpStereoCore(wiring.Component):
             handed = latched
             late = pipe(m, handed.admit & handed.start, 1, "start_late", reset=True)
             later = pipe(m, late, 1, "start_later", reset=True)
-            m.d.sync += start_allowed.eq(~(inp.switch_pending | late | later) & credit_far)
+            m.d.sync += start_allowed.eq(~(inp.switch_pending | late | later) & credit.early)
         # The credits and the count of frames in flight sit by the output: they take the
         # decision a clock late, through a register of its own (a copy loaded from the
         # proposal was 8.7 ns from the proposal's logic, census 9x9 on ECP5; at R = 1 the

@@ -7,16 +7,28 @@ queue or a position retires without one. Only its flag, "one more fits", reaches
 decision (:mod:`.core`), from registers.
 """
 
-from amaranth.hdl import Mux, Signal
+from dataclasses import dataclass
+
+from amaranth.hdl import Mux, Signal, Value
 
 from .common import pipe
 
-__all__ = ["credit_flag"]
+__all__ = ["CreditFlag", "credit_flag"]
+
+
+@dataclass(frozen=True)
+class CreditFlag:
+    """The flag the admission's decision reads (``flag``) and, with R = 1, the same a
+    clock earlier (``early``, for a register by the decision that combines it with other
+    conditions; None with R >= 2)."""
+
+    flag: Value
+    early: Value | None
 
 
 def credit_flag(m, depth, rounds, taken_now, popped, retired):
     """The flag the admission's decision reads: the output queue of ``depth`` words is sure
-    to take one more position.
+    to take one more position (a :class:`CreditFlag`).
 
     ``taken_now`` is the decision a clock late (a credit taken), ``popped`` a word leaving
     the queue, ``retired`` a position retiring without a word.
@@ -49,7 +61,13 @@ def credit_flag(m, depth, rounds, taken_now, popped, retired):
     m.d.comb += [kept.eq(credits + back), taken.eq(credits + back_less_one)]
     m.d.sync += [credits.eq(Mux(taken_now, taken, kept)),
                  has_credit.eq(_has_room(credits, _unseen_decisions(rounds)))]
-    return has_credit
+    if rounds > 1:
+        return CreditFlag(has_credit, None)
+    # With R = 1 the flag crosses from the credits (by the output) to the decision (by the
+    # input) through a copy by the decision, a clock later: the flag straight into the
+    # decision and the row counter was census 5x5 box's critical path at 1280 x 720
+    # (8.32 ns).
+    return CreditFlag(pipe(m, has_credit, 1, "has_credit_near", reset=True), has_credit)
 
 
 def _unseen_decisions(rounds):
@@ -57,9 +75,7 @@ def _unseen_decisions(rounds):
 
     A decision reaches the credits a clock later (``taken_now``), the credits the flag a
     clock after that. With R >= 2 decisions are two clocks apart or more, so one is
-    unseen; with R = 1 one per clock, and the admission's copy of the flag, a clock later
-    (hdl/core.py: the flag straight into the decision and the row counter was 8.32 ns,
-    census 5x5 box at 1280 x 720), makes three.
+    unseen; with R = 1 one per clock, and the flag's copy by the decision makes three.
     """
     return 1 if rounds > 1 else 3
 

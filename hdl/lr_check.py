@@ -251,8 +251,8 @@ class LRCheck(wiring.Component):
         writing = _write_enables(slots, tag.valid, stage_b, units)
         last = slots.first(stage_b + rounds - 1) if rounds > 1 else Const(1)
         stores = [Store(m, f"right_winners{i}", entry, rounds) for i in range(units)]
-        updated_words, framed_late, costs = [], {}, []
-        wins = None
+        updated_words, framed_late = [], {}
+        wins = previous_cost = None          # unit i - 1's, for unit i's lookahead
         for i, store in enumerate(stores):
             ok = Signal(name=f"candidate_ok{i}")
             k = i // LR_UNITS_PER_COPY
@@ -287,9 +287,9 @@ class LRCheck(wiring.Component):
                 # of this unit's own.
                 held = store.read(0)
                 if i:
-                    lower = _lookahead(m, i, early_cost, costs[-1], stores[i - 1].read(0),
-                                       held, wins, writing[i])
-            costs.append(cost)
+                    lower = _lookahead(m, i, early_cost, previous_cost,
+                                       stores[i - 1].read(0), held, wins, writing[i])
+            previous_cost = cost
             if i == 0 and rounds == 1:
                 wins = ok            # every right pixel's first candidate: always fresh
             else:
