@@ -20,7 +20,7 @@ from PIL import Image
 from npstereo.gen.cli import cmd_report
 from npstereo.gen.cli.main import main
 from npstereo.gen.explore import engine
-from npstereo.gen.flow.nextpnr import Placement
+from npstereo.gen.flow.nextpnr import BOX_R1_TIMING_WEIGHT, Placement
 from npstereo.gen.flow.synthesise import synthesise
 from npstereo.gen.flow.tools import tool_versions
 from npstereo.gen.reports import cache as report_cache, synthesis
@@ -129,6 +129,57 @@ def test_placer_timing_weight_is_part_of_the_cache_key():
     assert report_cache.cache_key(params, "ecp5", False, 150.0, "d",
                                   placement=Placement(timing_weight=30)) == \
         report_cache.cache_key(params, "ecp5", False, 150.0, "d")
+
+
+BOX_R1 = StereoParams(transform="census", block=3, disparities=4, rounds=1, width=16, height=4)
+
+
+@pytest.mark.parametrize("params, given, placed", [
+    (BOX_R1, Placement(), Placement(timing_weight=BOX_R1_TIMING_WEIGHT)),
+    (BOX_R1, Placement(seed=2), Placement(seed=2, timing_weight=BOX_R1_TIMING_WEIGHT)),
+    (BOX_R1, Placement(timing_weight=10), Placement(timing_weight=10)),
+    (dataclasses.replace(BOX_R1, rounds=2), Placement(), Placement()),
+    (dataclasses.replace(BOX_R1, aggregation="sgm", p1=3, p2=20), Placement(), Placement()),
+])
+def test_flow_chooses_the_timing_weight_of_a_box_core_at_one_round(params, given, placed):
+    assert given.for_core(params) == placed
+
+
+def test_report_of_a_box_core_at_one_round_is_its_weighted_placement(tmp_path):
+    """A report at the flow's default reads the result placed with the weight the flow
+    chooses for the core, the one an explicit ``--placer-timing-weight 30`` stores.
+    Broken variant: a default that does not reach the cache key finds nothing."""
+    digest = report_cache.design(BOX_R1, tmp_path)[0]
+    key = report_cache.cache_key(BOX_R1, "ecp5", True, 150.0, digest,
+                                 placement=Placement(timing_weight=BOX_R1_TIMING_WEIGHT))
+    report_cache.store_result(tmp_path / f"{key}.json", _placed(BOX_R1_TIMING_WEIGHT))
+    found = synthesis.lookup(BOX_R1, ("ecp5",), True, 150.0, tmp_path)
+    assert found["results"]["ecp5"]["fmax_mhz"] == 151.0
+
+
+def _placed(weight):
+    return {"target": "ecp5", "status": "ok", "fmax_mhz": 151.0 if weight else 108.0,
+            "pnr": True, "freq": 150.0, "seed": None, "placer_timing_weight": weight}
+
+
+@pytest.mark.parametrize("weight", [None, BOX_R1_TIMING_WEIGHT])
+def test_sweep_document_seeds_a_result_under_its_own_placement(tmp_path, weight):
+    """A result of a sweep document is seeded under the choices it was placed with: at
+    nextpnr's own weight it is not the default's result for a box core at R = 1, at the
+    flow's weight it is. Broken variants: keyed by the flow's default, the first is found
+    as the weighted one; keyed without the recorded weight, the second is not found."""
+    digest = report_cache.design(BOX_R1, tmp_path / "memo")[0]
+    sweep = tmp_path / "sweep.json"
+    sweep.write_text(json.dumps({
+        "tools": tool_versions(), "hdl_sources": report_cache.source_hash(),
+        "reports": [{"params": dataclasses.asdict(BOX_R1), "verilog_sha": digest,
+                     "results": {"ecp5": _placed(weight)}}]}))
+    assert report_cache.seed_cache(sweep, tmp_path) == 1
+    found = synthesis.lookup(BOX_R1, ("ecp5",), True, 150.0, tmp_path)
+    assert (found is None) == (weight is None)
+    key = report_cache.cache_key(BOX_R1, "ecp5", True, 150.0, digest,
+                                 placement=Placement(timing_weight=weight))
+    assert json.loads((tmp_path / f"{key}.json").read_text())["placer_timing_weight"] == weight
 
 
 def test_placement_gives_nextpnr_its_arguments():

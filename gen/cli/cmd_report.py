@@ -22,7 +22,7 @@ from ..atomic import write_text
 from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
     task_key
 from ..flow.capacity import DEFAULT_DEVICE
-from ..flow.nextpnr import PLACEMENT_RANGES, Placement, out_of_range
+from ..flow.nextpnr import BOX_R1_TIMING_WEIGHT, PLACEMENT_RANGES, Placement, out_of_range
 from ..flow.tools import TARGETS, tool_versions
 from ..reports.cache import earlier_reports, seed_cache, source_hash
 from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
@@ -195,7 +195,8 @@ def add_arguments(parser):
     parser.add_argument("--placer-timing-weight", type=int, default=None, metavar="N",
                         help="the weight of timing in nextpnr's placer for one configuration "
                              "with --pnr ({} to {}; ".format(*PLACEMENT_RANGES["timing_weight"]) +
-                             "default nextpnr's own, 10): another placement, "
+                             f"default {BOX_R1_TIMING_WEIGHT} for a box core at R = 1, "
+                             "nextpnr's own, 10, otherwise): another placement, "
                              "docs/synthesis-flow.md")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
     width, height = PAPER_SIZE

@@ -17,7 +17,8 @@ from .logs import nextpnr_timing
 from .processes import run_tool
 from .tools import find_tool
 
-__all__ = ["CLOCK_PIN", "PLACEMENT_RANGES", "Placement", "out_of_range", "place_and_route"]
+__all__ = ["BOX_R1_TIMING_WEIGHT", "CLOCK_PIN", "PLACEMENT_RANGES", "Placement", "out_of_range",
+           "place_and_route"]
 
 #: Allowed values of each of :class:`Placement`'s choices: nextpnr reads ``--seed`` as a C
 #: int; its placer takes any int as its timing weight, but 0 would place without timing
@@ -60,6 +61,23 @@ class Placement:
     def fields(self):
         """The choices as a result records them (and a cache key holds those given)."""
         return {"seed": self.seed, "placer_timing_weight": self.timing_weight}
+
+    def for_core(self, params):
+        """These choices with the flow's own where they leave one to nextpnr: the timing
+        weight :data:`BOX_R1_TIMING_WEIGHT` for a box core at R = 1 (``params``, a
+        :class:`~npstereo.params.StereoParams`)."""
+        if self.timing_weight is None and params.rounds == 1 and not params.is_sgm:
+            return dataclasses.replace(self, timing_weight=BOX_R1_TIMING_WEIGHT)
+        return self
+
+
+#: The placer's timing weight for the box pipeline at R = 1: a wide feed-forward core whose
+#: critical arcs are control fanned out across the die. The weight gained in 10 of 12
+#: pairs of placements of census 5x5, D = 64 at 720p and 1080p (twelfth to fourteenth
+#: sessions, up to 43 MHz; it lost 12.9 and 1.0 in the other two), and only it placed
+#: those cores at 150 MHz. SGM keeps nextpnr's own: at R = 10, whose loops are local, the
+#: weight lost (docs/synthesis-flow.md).
+BOX_R1_TIMING_WEIGHT = 30
 
 #: Timing-driven rip-up re-routes every arc that misses the clock, each iteration, and
 #: nextpnr 0.11 keeps at it for 1,500 iterations. A design far from the target (thousands

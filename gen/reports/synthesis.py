@@ -30,7 +30,7 @@ __all__ = ["synthesis_report", "lookup", "store_report", "failed_report", "synth
 
 
 def _path(cache, params, target, pnr, freq, digest, device, placement=Placement()):
-    key = cache_key(params, target, pnr, freq, digest, device, placement)
+    key = cache_key(params, target, pnr, freq, digest, device, placement.for_core(params))
     return Path(cache) / f"{key}.json"
 
 
@@ -93,8 +93,11 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
     :data:`~npstereo.gen.flow.capacity.CYCLONEV_DEVICE`) gets :func:`memory_refusal`'s
     result before anything is generated; when every target does, no Verilog is generated
     (``verilog_sha`` None). ``placement``: nextpnr's choices
-    (:class:`~npstereo.gen.flow.nextpnr.Placement`), those given part of the cache key.
+    (:class:`~npstereo.gen.flow.nextpnr.Placement`), with the flow's own where it leaves a
+    choice open (:meth:`~npstereo.gen.flow.nextpnr.Placement.for_core`), those set part of
+    the cache key.
     """
+    placement = placement.for_core(params)
     results = _refusals(params, targets, device)
     if len(results) == len(targets):
         return _report(params, None, {t: results[t] for t in targets})
