@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
-from ...params import TRANSFORMS, StereoParams, UserError
+from ...params import SGM, TRANSFORMS, StereoParams, UserError
 from ..atomic import write_text
 from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
     task_key
@@ -208,7 +208,8 @@ def add_arguments(parser):
     blocks = "/".join(f"{b}x{b}" for _, b in CAMERA_TRANSFORMS)
     parser.add_argument("--camera", action="store_true",
                         help=f"the camera-rate sweep: census {blocks}, box and SGM, at "
-                             f"{sizes}, R={'/'.join(map(str, CAMERA_ROUNDS))}")
+                             f"{sizes}, R={'/'.join(map(str, CAMERA_ROUNDS[3]))} (SGM "
+                             f"R={'/'.join(map(str, CAMERA_ROUNDS[SGM]))})")
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("docs/resources"),
                         help="output folder of --paper and --camera (default docs/resources)")
