@@ -213,16 +213,13 @@ def delay(m, en, value, steps, name):
 
 def round_base(m, slots, offset, step):
     """round * ``step`` at ``offset`` (the round's first disparity), without a multiplier:
-    a register that adds ``step`` every clock and wraps after round R - 1, running free
-    from its reset value as :meth:`SlotClock.phased_round` does. A restart from the slot
-    pulse made the core's pulse register reach the calculation stage's round base (census
-    5x5 SGM at 1280 x 720, D = 64, R = 4 on ECP5: 7.07 ns, two LUTs, the critical path)."""
+    a register that restarts at 0 with each slot and adds ``step`` every clock."""
     if slots.rounds == 1:
         return Const(0)
-    rounds = slots.rounds
-    value = Signal(range(rounds * step), name=f"{slots.name}_round_base{offset}",
-                   init=(-slots.base - offset) % rounds * step)
-    m.d.sync += value.eq(Mux(value == (rounds - 1) * step, 0, value + step))
+    assert offset >= 1, "the counter restarts from the slot pulse a clock ahead"
+    value = Signal(range(slots.rounds * step), name=f"{slots.name}_round_base{offset}")
+    restart = (value == (slots.rounds - 1) * step) | slots.first(offset - 1)
+    m.d.sync += value.eq(Mux(restart, 0, value + step))
     return value
 
 
