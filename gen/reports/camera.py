@@ -2,8 +2,8 @@
 
 ``npstereo report --camera`` synthesises (and with ``--pnr`` places and routes on the ECP5)
 census 5x5 and 7x7, box and SGM, at the camera formats below with all D disparities per
-clock (R = 1) and at R = 2 (SGM also at R = 4), and writes ``camera.json`` (the sweep's schema) and
-``camera.md`` (:func:`~.tables.camera_markdown`): logic, memory, clock, frames/s and
+clock (R = 1) and at R = 2 (SGM also at R = 4), and writes ``camera.json`` (the sweep's
+schema) and ``camera.md`` (:func:`~.tables.camera_markdown`): logic, memory, clock, frames/s and
 disparity evaluations per second (W H D fps, the measure the field compares designs by),
 beside the published peers.
 """
