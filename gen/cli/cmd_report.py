@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from ...hdl.plan import MAX_BLOCK, MAX_DISPARITIES, MAX_WIDTH, check_buildable
-from ...params import SGM, TRANSFORMS, StereoParams, UserError
+from ...params import TRANSFORMS, StereoParams, UserError
 from ..atomic import write_text
 from ..explore.engine import Task, TaskFailure, check_engine_arguments, cluster, run_tasks, \
     task_key
@@ -25,7 +25,7 @@ from ..flow.capacity import DEFAULT_DEVICE
 from ..flow.nextpnr import BOX_R1_TIMING_WEIGHT, PLACEMENT_RANGES, Placement, out_of_range
 from ..flow.tools import TARGETS, tool_versions
 from ..reports.cache import earlier_reports, seed_cache, source_hash
-from ..reports.camera import CAMERA_FORMATS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
+from ..reports.camera import CAMERA_FORMATS, CAMERA_MATCHERS, CAMERA_ROUNDS, CAMERA_TRANSFORMS, \
     camera_configurations
 from ..reports.paper_data import PAPER_BLOCKS, PAPER_DISPARITIES, PAPER_ROUNDS, PAPER_SIZE, \
     is_default_line_buffer, paper_configurations, sweep_targets
@@ -207,9 +207,9 @@ def add_arguments(parser):
     sizes = ", ".join(f"{w}x{h} D={'/'.join(map(str, d))}" for w, h, d in CAMERA_FORMATS)
     blocks = "/".join(f"{b}x{b}" for _, b in CAMERA_TRANSFORMS)
     parser.add_argument("--camera", action="store_true",
-                        help=f"the camera-rate sweep: census {blocks}, box and SGM, at "
-                             f"{sizes}, R={'/'.join(map(str, CAMERA_ROUNDS[3]))} (SGM "
-                             f"R={'/'.join(map(str, CAMERA_ROUNDS[SGM]))})")
+                        help=f"the camera-rate sweep: census {blocks} at {sizes}, " +
+                             ", ".join(f"{CAMERA_MATCHERS[a]} at R={'/'.join(map(str, r))}"
+                                       for a, r in CAMERA_ROUNDS.items()))
     add_engine_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("docs/resources"),
                         help="output folder of --paper and --camera (default docs/resources)")

@@ -62,6 +62,12 @@ class Placement:
         """The choices as a result records them (and a cache key holds those given)."""
         return {"seed": self.seed, "placer_timing_weight": self.timing_weight}
 
+    @classmethod
+    def recorded(cls, result):
+        """The choices a result was placed with (:meth:`fields`' record; nextpnr's own
+        where it records none)."""
+        return cls(result.get("seed"), result.get("placer_timing_weight"))
+
     def for_core(self, params):
         """These choices with the flow's own where they leave one to nextpnr: the timing
         weight :data:`BOX_R1_TIMING_WEIGHT` for a box core at R = 1 (``params``, a

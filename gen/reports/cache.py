@@ -195,9 +195,8 @@ def seed_cache(sweep_json, cache):
                 continue  # an older result that did not record its nextpnr settings
             # Keyed by the choices the result was placed with (recorded since they could
             # be chosen), not the flow's default for the core, which may be other ones.
-            placed_with = Placement(result.get("seed"), result.get("placer_timing_weight"))
             key = cache_key(params, target, result.get("pnr", False), result.get("freq"),
-                            digest, placement=placed_with)
+                            digest, placement=Placement.recorded(result))
             path = Path(cache) / f"{key}.json"
             if not path.exists():
                 store_result(path, result)

@@ -10,7 +10,7 @@ beside the published peers.
 
 from ...params import SGM, StereoParams
 
-__all__ = ["CAMERA_FORMATS", "CAMERA_TRANSFORMS", "CAMERA_ROUNDS", "PEERS",
+__all__ = ["CAMERA_FORMATS", "CAMERA_TRANSFORMS", "CAMERA_ROUNDS", "CAMERA_MATCHERS", "PEERS",
            "camera_configurations", "evaluations_per_second"]
 
 #: (width, height, disparity ranges) of the camera formats.
@@ -22,6 +22,8 @@ CAMERA_TRANSFORMS = (("census", 5), ("census", 7))
 #: at R = 4: at R = 2 its left path's update has one clock (70.8 MHz at 1280x720, the
 #: eleventh session), at R = 4 three, the rate a camera gets from SGM (141-150 MHz at 720p).
 CAMERA_ROUNDS = {SGM: (1, 2, 4), 3: (1, 2)}
+#: How the matchers of :data:`CAMERA_ROUNDS` are named.
+CAMERA_MATCHERS = {SGM: "SGM", 3: "the 3x3 box"}
 #: Published designs: (design, W, H, D, frames/s); Vitis at 200 MHz evaluates 16
 #: disparities per clock (24.1 frames/s at 1080p, D = 64).
 PEERS = (("Vitis Vision SemiGlobalBM (200 MHz)", 1920, 1080, 64, 24.1),
@@ -39,5 +41,5 @@ def camera_configurations():
     then the box, smaller frames first."""
     return [StereoParams(transform=t, block=b, disparities=d, rounds=r, aggregation=a,
                          width=w, height=h)
-            for a in (SGM, 3) for w, h, ranges in CAMERA_FORMATS for d in ranges
-            for t, b in CAMERA_TRANSFORMS for r in CAMERA_ROUNDS[a]]
+            for a, rounds in CAMERA_ROUNDS.items() for w, h, ranges in CAMERA_FORMATS
+            for d in ranges for t, b in CAMERA_TRANSFORMS for r in rounds]
