@@ -10,7 +10,7 @@ from .plan_structure import choice_levels, row_banks
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS", "sgm_row_clocks", "SGM_ABOVE_EVERY",
-           "SGM_LEFT_LEAD", "sgm_left_pairs", "sgm_left_stages", "sgm_left_firsts_registered",
+           "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS", "sgm_left_pairs", "sgm_left_stages", "sgm_left_firsts_registered",
            "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "sgm_delays",
            "FifthTiming", "sgm_fifth_timing"]
 
@@ -42,6 +42,13 @@ def sgm_row_clocks(params):
 #: in one clock were census 7x7 SGM's path at R = 10, 6.96 ns; the sum waits for the left
 #: path's L anyway).
 SGM_ABOVE_EVERY = 1
+
+
+#: Clocks from reading the picked costs to their sum where C(x - 1, b(x)) joins it last
+#: (``SgmTiming.left_sum_late``): its own (read, registered, then the last addition), and
+#: the others' (read, registered, three levels of additions over J - 1 terms and P2, each
+#: registered, then the last addition).
+SGM_LEFT_LATE_CLOCKS = (2, 5)
 
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
@@ -128,7 +135,9 @@ class SgmTiming:
     left_hand: int      #: m(0) stored for the row's first J positions
     left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
     left_sum_clocks: int  #: clocks from reading the picked costs C(x - k, b(x)) to their sum
+    left_sum_late: bool  #: C(x - 1, b(x)) joins the sum last (:data:`SGM_LEFT_LATE_CLOCKS`)
     left_start_early: bool  #: ref's start, Lu(x - J, b(x)) or m(0), chosen a clock early
+    left_start_read: bool  #: ... and Lu(x - J, b(x)) read from its file a clock before that
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
     left_chain: int     #: the first k whose b(p + k) comes down the chain (the rest read)
     left_chain_at: int  #: where position p shifts the chain (b(p + J) read from the history)
@@ -193,6 +202,15 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     picks = picks_with(argmin, history)
     # C(x - k, b(x)) in its file before position x reads it at reference - sum_clocks.
     assert margins(picks, sum_clocks), picks
+    # The sum with a clock per level of additions where the margins allow it: C(x - 1,
+    # b(x)), picked last, joins the sum of the others in the last clock. Two levels of
+    # additions in one clock were census 7x7 SGM's critical path at 640 x 480, D = 64,
+    # R = 4 (7.81 ns, 8 levels, 128.1 MHz).
+    # (P2 joins the others' terms, so it must be there: not with one lane, T = 0.)
+    late, rest = SGM_LEFT_LATE_CLOCKS
+    sum_late = (reference - rest + 1 >= SGM_GUIDE_CLOCKS
+                and all(at + rounds + 2 <= k * rounds + reference - (late if k == 1 else rest)
+                        for k, at in enumerate(picks[:-1], 1)))
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
@@ -219,6 +237,10 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # and the addition in one clock were census 7x7 SGM's path at R = 10 (7.57 ns).
     start_early = (lu + rounds + 1 <= steps * rounds + reference - 1
                    and hand + 1 <= rounds + reference - 1)
+    # ... and its file read into a register a clock before that choice (m(0) is still
+    # chosen where it was): the file's multiplexer and the choice in one clock were census
+    # 7x7 SGM's critical path at 640 x 480, D = 64, R = 4 (8.93 ns, 4 levels, 112.0 MHz).
+    start_read = start_early and lu + rounds + 1 <= steps * rounds + reference - 2
     # m(x - 1) is there R clocks before argmin, and L = Lu - m(x - 1) leaves 2 clocks after.
     left = argmin - rounds + 2
     rows = sgm_row_clocks(params)
@@ -227,7 +249,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
-                     history, sum_clocks, start_early, picks, chain, chain_at, chain_history, left, rows,
+                     history, sum_clocks, sum_late, start_early, start_read, picks, chain, chain_at, chain_history, left, rows,
                      above, rows + tree + rounds, summed)
 
 

@@ -8,6 +8,7 @@ what these build; docs/hardware.md "Semi-global aggregation" the structure).
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
+from .plan_timing import SGM_LEFT_LATE_CLOCKS
 from .common import bits_for, register, replica
 
 __all__ = ["reference_sum", "pick_references"]
@@ -66,41 +67,72 @@ def _padded(values, count):
 
 def reference_sum(owner, m, column, m0, p2, chosen, sums):
     """ref(x) + P2(x) in the clock ``loop`` - 1: the C(x - k, b(x)) that exist (x - k >= 1)
-    read from their files ``timing.left_sum_clocks`` before, registered where that is two
-    or three, and added to P2 (the first level of additions registered where three), then
-    Lu(x - J, b(x)), or m(0) for x <= J (chosen a clock earlier into a register where
-    ``timing.left_start_early``)."""
-    t, steps = owner.timing, SGM_TRACK_STEPS
-    bits, index = owner.params.left_loop_bits, steps.bit_length() - 1
-    at = t.left_reference - t.left_sum_clocks
-    # Which entries exist and where they are, from the column a clock ahead (a slot-aligned
-    # value holds for the slot's R clocks, so the registers hold this position's): the
-    # subtractions and comparisons in front of the files' multiplexers and the additions
-    # were census 7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers
-    # and the additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz).
-    x = column(at - 1)
+    read from their files and added to P2, then Lu(x - J, b(x)), or m(0) for x <= J
+    (chosen a clock earlier into a register where ``timing.left_start_early``, Lu(x - J,
+    b(x)) read into a register a clock before that where ``timing.left_start_read``).
 
-    terms = [Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
-                 _read_file(m, entries, (x - k)[:index], f"sgm_left_entry{k}"), 0)
-             for k, entries in enumerate(sums, 1)]
-    if t.left_sum_clocks >= 2:
-        terms = [register(m, term, owner.params.cost_bits, f"sgm_left_term{k}")
-                 for k, term in enumerate(terms, 1)]
+    The sum: where ``timing.left_sum_late``, a clock per level of additions, C(x - 1,
+    b(x)) (picked last) added to the others' sum in the last
+    (:data:`~.plan_sgm_timing.SGM_LEFT_LATE_CLOCKS`); else all read
+    ``timing.left_sum_clocks`` before, registered where that is two or three, the first
+    level of additions registered where three."""
+    t, steps = owner.timing, SGM_TRACK_STEPS
+    bits, cost_bits = owner.params.left_loop_bits, owner.params.cost_bits
+    index = steps.bit_length() - 1
+
+    def read(k, entries, at):
+        """C(x - k, b(x)) or 0 (x - k < 1), from its file at ``at``. Which entry and
+        whether it exists come from the column a clock ahead (a slot-aligned value holds
+        for the slot's R clocks, so the registers hold this position's): the subtractions
+        and comparisons in front of the files' multiplexers and the additions were census
+        7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers and the
+        additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz)."""
+        x = column(at - 1)
+        return Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
+                   _read_file(m, entries, (x - k)[:index], f"sgm_left_entry{k}"), 0)
+
     def level(terms):       # a tree of additions, not a chain
         return [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
-    # With three clocks the first level of additions is registered (P2 joins it).
-    first_level = t.left_sum_clocks == 3
-    terms.append(owner._aligned(p2, t.guide, t.left_reference - 1 - first_level,
-                                 "sgm_left_p2"))
-    if first_level:
-        terms = [register(m, v, len(v), f"sgm_left_pair{k}") for k, v in enumerate(level(terms))]
-    while len(terms) > 1:
-        terms = level(terms)
-    total = register(m, terms[0][:bits], bits, "sgm_left_csum")
-    early = t.left_start_early
+
+    def registered(terms, name):
+        return [register(m, v, len(v), f"{name}{k}") for k, v in enumerate(terms, 1)]
+
+    if t.left_sum_late:
+        late, rest = SGM_LEFT_LATE_CLOCKS
+        at = t.left_reference - rest
+        terms = registered([read(k, entries, at) for k, entries in enumerate(sums[1:], 2)],
+                           "sgm_left_term")
+        terms.append(owner._aligned(p2, t.guide, at + 1, "sgm_left_p2"))
+        for depth in range(rest - 2):
+            terms = registered(level(terms), f"sgm_left_level{depth}_")
+        assert len(terms) == 1, "one level of additions per clock"
+        first = register(m, read(1, sums[0], t.left_reference - late), cost_bits,
+                         "sgm_left_term1")
+        total = register(m, (terms[0] + first)[:bits], bits, "sgm_left_csum")
+    else:
+        at = t.left_reference - t.left_sum_clocks
+        terms = [read(k, entries, at) for k, entries in enumerate(sums, 1)]
+        if t.left_sum_clocks >= 2:
+            terms = [register(m, term, cost_bits, f"sgm_left_term{k}")
+                     for k, term in enumerate(terms, 1)]
+        # With three clocks the first level of additions is registered (P2 joins it).
+        first_level = t.left_sum_clocks == 3
+        terms.append(owner._aligned(p2, t.guide, t.left_reference - 1 - first_level,
+                                     "sgm_left_p2"))
+        if first_level:
+            terms = [register(m, v, len(v), f"sgm_left_pair{k}")
+                     for k, v in enumerate(level(terms))]
+        while len(terms) > 1:
+            terms = level(terms)
+        total = register(m, terms[0][:bits], bits, "sgm_left_csum")
+    early, read = t.left_start_early, t.left_start_read
     x = column(t.left_reference - 1 - early)
     near = register(m, x <= steps, 1, "sgm_left_near")
-    start = Mux(near, m0, _read_file(m, chosen, x[:index], "sgm_left_chosen_at"))
+    entry = _read_file(m, chosen, column(t.left_reference - 1 - early - read)[:index],
+                       "sgm_left_chosen_at")
+    if read:
+        entry = register(m, entry, bits, "sgm_left_chosen")
+    start = Mux(near, m0, entry)
     if early:
         start = register(m, start, bits, "sgm_left_start")
     return (start + total)[:bits]

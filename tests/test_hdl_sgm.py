@@ -413,15 +413,21 @@ def test_any_rounds_dividing_d_are_built(disparities, rounds):
     # R = 1: the loop over two positions, Lu three clocks after its read.
     assert timing.left_stages == (3 if rounds == 1 else 1 if rounds == 2 else
                                   2 if rounds == 3 else 3)
-    # (argmin tree split, history clocks, sum clocks, start early): each as long as the
-    # margins allow; J = 8 leaves them all at R = 1 but the early start (m(0) is stored at
-    # the clock that loads the reference), one lane (D = R) two clocks for the sum.
-    expected = {(4, 1): (True, 2, 3, False), (64, 1): (True, 2, 3, False),
-                (256, 1): (True, 2, 3, False), (100, 5): (True, 2, 3, True),
-                (7, 7): (True, 2, 2, True), (256, 2): (True, 2, 3, True),
-                (9, 3): (True, 2, 3, True)}
+    # (argmin tree split, history clocks, sum clocks, C(x - 1, b) joining the sum last,
+    # start early, its file read early): each as long as the margins allow; J = 8 leaves
+    # them all at R = 1 but the late term and the early start (m(0) is stored at the clock
+    # that loads the reference) and so its early read, one lane (D = R, T = 0) two clocks
+    # for the sum and no late term (P2 is not there early enough).
+    expected = {(4, 1): (True, 2, 3, False, False, False),
+                (64, 1): (True, 2, 3, False, False, False),
+                (256, 1): (True, 2, 3, False, False, False),
+                (100, 5): (True, 2, 3, True, True, True),
+                (7, 7): (True, 2, 2, False, True, True),
+                (256, 2): (True, 2, 3, True, True, True),
+                (9, 3): (True, 2, 3, True, True, True)}
     assert (timing.left_argmin_split, timing.left_history, timing.left_sum_clocks,
-            timing.left_start_early) == expected[(disparities, rounds)]
+            timing.left_sum_late,
+            timing.left_start_early, timing.left_start_read) == expected[(disparities, rounds)]
 
 
 def test_narrow_sgm_frames_are_refused():
