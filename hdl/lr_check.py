@@ -63,12 +63,13 @@ def _consistent(partner, low, high):
 
 def _low_comparisons(m, difference, copies_of_difference, units, copies):
     """``at_least(k, i)``: copy k of ``difference`` (a register of it) is >= unit i, as
-    a comparison of the low bits only, for R <= 2 (no clock to register it apart).
+    a comparison of the low bits only.
 
     The high part's two cases (above the units, or zero) are flags formed a clock ahead
     beside each copy, so the comparison left in the clock is as wide as the unit index:
     the whole column's carry chain and the frame flag in one clock were census 5x5 box's
-    critical path at 1920 x 1080, R = 1 (6.68 ns, 13 levels).
+    critical path at 1920 x 1080, R = 1 (6.68 ns, 13 levels), and the carry chain alone
+    into a register census 7x7 SGM's at 640 x 480, D = 64, R = 4 (7.37 ns, 13 levels).
     """
     low_bits = bits_for(units - 1)
     above = [replica(m, difference >= (1 << low_bits), f"lr_x_above_units{k}",
@@ -236,8 +237,7 @@ class LRCheck(wiring.Component):
                                 reset_less=True) for k in copies]
         in_frame = [replica(m, framed, f"lr_in_frame{k}") for k in copies]
         stage_a, stage_b = LR_STAGE_A, lr_stage_b(p)
-        if stage_b <= 3:
-            at_least = _low_comparisons(m, difference, x_minus_base, units, copies)
+        at_least = _low_comparisons(m, difference, x_minus_base, units, copies)
         # With R >= 3 the word read in stage A is registered before it is compared (a LUT
         # RAM read and a carry chain in one clock were 7.3 ns, census 7x7 on ECP5): the
         # write then lands two clocks after the next unit's read of that word, which
@@ -262,7 +262,7 @@ class LRCheck(wiring.Component):
                 if k not in framed_late:
                     framed_late[k] = pipe(m, in_frame[k], 1, f"lr_in_frame{k}_late", True)
                 m.d.sync += ok.eq(framed_late[k] &
-                                  register(m, x_minus_base[k] >= i, 1, f"candidate_ge{i}"))
+                                  register(m, at_least(k, i), 1, f"candidate_ge{i}"))
             else:
                 m.d.sync += ok.eq(in_frame[k] & at_least(k, i))
             ok = pipe(m, ok, stage_b - 3 - (stage_b > 3), f"candidate_ok{i}", reset=True)
