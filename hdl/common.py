@@ -211,15 +211,18 @@ def delay(m, en, value, steps, name):
     return value
 
 
-def round_base(m, slots, offset, step):
-    """round * ``step`` at ``offset`` (the round's first disparity), without a multiplier:
-    a register that restarts at 0 with each slot and adds ``step`` every clock."""
+def round_base(m, slots, offset, step, start=0):
+    """``start`` + round * ``step`` at ``offset`` (the round's first disparity), without a
+    multiplier: a register that restarts at ``start`` with each slot and adds ``step``
+    every clock."""
     if slots.rounds == 1:
-        return Const(0)
+        return Const(start)
     assert offset >= 1, "the counter restarts from the slot pulse a clock ahead"
-    value = Signal(range(slots.rounds * step), name=f"{slots.name}_round_base{offset}")
-    restart = (value == (slots.rounds - 1) * step) | slots.first(offset - 1)
-    m.d.sync += value.eq(Mux(restart, 0, value + step))
+    suffix = f"_from{start}" if start else ""
+    value = Signal(range(start + slots.rounds * step),
+                   name=f"{slots.name}_round_base{offset}{suffix}")
+    restart = (value == start + (slots.rounds - 1) * step) | slots.first(offset - 1)
+    m.d.sync += value.eq(Mux(restart, start, value + step))
     return value
 
 

@@ -61,21 +61,31 @@ def _consistent(partner, low, high):
     return (partner >= low) & (partner <= high)
 
 
-def _low_comparisons(m, difference, copies_of_difference, units, copies):
-    """``at_least(k, i)``: copy k of ``difference`` (a register of it) is >= unit i, as
-    a comparison of the low bits only.
+def _low_comparisons(m, x, base, difference, units, copies_of_difference, copies, slots):
+    """``at_least(k, i)``: copy k of ``difference`` = x - ``base`` (a register of it,
+    ``base`` the round's first disparity) is >= unit i, as a comparison of the low bits
+    only.
 
     The high part's two cases (above the units, or zero) are flags formed a clock ahead
     beside each copy, so the comparison left in the clock is as wide as the unit index:
     the whole column's carry chain and the frame flag in one clock were census 5x5 box's
     critical path at 1920 x 1080, R = 1 (6.68 ns, 13 levels), and the carry chain alone
     into a register census 7x7 SGM's at 640 x 480, D = 64, R = 4 (7.37 ns, 13 levels).
+    With R > 1 the flags compare x with the base and with the base + 2^bits (a counter of
+    its own), side by side: the subtraction and a comparison after it in one clock were
+    census 7x7 SGM's critical path there (8.17 ns, 11 levels).
     """
     low_bits = bits_for(units - 1)
-    above = [replica(m, difference >= (1 << low_bits), f"lr_x_above_units{k}",
-                     reset_less=True) for k in copies]
-    within = [replica(m, (difference >= 0) & (difference < (1 << low_bits)),
-                      f"lr_x_within_units{k}", reset_less=True) for k in copies]
+    if isinstance(base, Const):
+        above_early = difference >= (1 << low_bits)
+        within_early = (difference >= 0) & (difference < (1 << low_bits))
+    else:
+        above_early = x >= round_base(m, slots, 1, units, start=1 << low_bits)
+        within_early = (x >= base) & ~above_early
+    above = [replica(m, above_early, f"lr_x_above_units{k}", reset_less=True)
+             for k in copies]
+    within = [replica(m, within_early, f"lr_x_within_units{k}", reset_less=True)
+              for k in copies]
 
     def at_least(k, i):
         if i == 0:    # the low bits are >= 0 always (a constant comparison fails lint)
@@ -228,7 +238,8 @@ class LRCheck(wiring.Component):
         # One copy of x - j*D/R and of the frame flag per LR_UNITS_PER_COPY units (replicas):
         # one register for all 64 units' comparisons was census 5x5's critical path at
         # 1280 x 720, D = 64, R = 1 (6.2 ns of routing to the farthest unit, ECP5).
-        difference = tag.x - round_base(m, slots, 1, units)
+        base = round_base(m, slots, 1, units)
+        difference = tag.x - base
         # The row's comparisons with the frame a clock ahead, from the input tag.
         framed = tag.valid & tag.live & row_inside_ahead(m, self.tag.y, 0, p.height, "lr_row")
         copies = range(-(-units // LR_UNITS_PER_COPY))
@@ -237,7 +248,8 @@ class LRCheck(wiring.Component):
                                 reset_less=True) for k in copies]
         in_frame = [replica(m, framed, f"lr_in_frame{k}") for k in copies]
         stage_a, stage_b = LR_STAGE_A, lr_stage_b(p)
-        at_least = _low_comparisons(m, difference, x_minus_base, units, copies)
+        at_least = _low_comparisons(m, tag.x, base, difference, units, x_minus_base, copies,
+                                    slots)
         # With R >= 3 the word read in stage A is registered before it is compared (a LUT
         # RAM read and a carry chain in one clock were 7.3 ns, census 7x7 on ECP5): the
         # write then lands two clocks after the next unit's read of that word, which

@@ -80,14 +80,21 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
     bits, cost_bits = owner.params.left_loop_bits, owner.params.cost_bits
     index = steps.bit_length() - 1
 
-    def read(k, entries, at):
+    columns = {}
+
+    def column_at(offset):      # one delay per offset, as in the netlists measured
+        if offset not in columns:
+            columns[offset] = column(offset)
+        return columns[offset]
+
+    def picked_cost(k, entries, at):
         """C(x - k, b(x)) or 0 (x - k < 1), from its file at ``at``. Which entry and
         whether it exists come from the column a clock ahead (a slot-aligned value holds
         for the slot's R clocks, so the registers hold this position's): the subtractions
         and comparisons in front of the files' multiplexers and the additions were census
         7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers and the
         additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz)."""
-        x = column(at - 1)
+        x = column_at(at - 1)
         return Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
                    _read_file(m, entries, (x - k)[:index], f"sgm_left_entry{k}"), 0)
 
@@ -95,23 +102,23 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
         return [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
 
     def registered(terms, name):
-        return [register(m, v, len(v), f"{name}{k}") for k, v in enumerate(terms, 1)]
+        return [register(m, v, len(v), f"{name}{k}") for k, v in enumerate(terms)]
 
     if t.left_sum_late:
         late, rest = SGM_LEFT_LATE_CLOCKS
         at = t.left_reference - rest
-        terms = registered([read(k, entries, at) for k, entries in enumerate(sums[1:], 2)],
-                           "sgm_left_term")
+        terms = [register(m, picked_cost(k, entries, at), cost_bits, f"sgm_left_term{k}")
+                 for k, entries in enumerate(sums[1:], 2)]
         terms.append(owner._aligned(p2, t.guide, at + 1, "sgm_left_p2"))
         for depth in range(rest - 2):
             terms = registered(level(terms), f"sgm_left_level{depth}_")
         assert len(terms) == 1, "one level of additions per clock"
-        first = register(m, read(1, sums[0], t.left_reference - late), cost_bits,
+        first = register(m, picked_cost(1, sums[0], t.left_reference - late), cost_bits,
                          "sgm_left_term1")
         total = register(m, (terms[0] + first)[:bits], bits, "sgm_left_csum")
     else:
         at = t.left_reference - t.left_sum_clocks
-        terms = [read(k, entries, at) for k, entries in enumerate(sums, 1)]
+        terms = [picked_cost(k, entries, at) for k, entries in enumerate(sums, 1)]
         if t.left_sum_clocks >= 2:
             terms = [register(m, term, cost_bits, f"sgm_left_term{k}")
                      for k, term in enumerate(terms, 1)]
@@ -126,9 +133,9 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
             terms = level(terms)
         total = register(m, terms[0][:bits], bits, "sgm_left_csum")
     early, read = t.left_start_early, t.left_start_read
-    x = column(t.left_reference - 1 - early)
+    x = column_at(t.left_reference - 1 - early)
     near = register(m, x <= steps, 1, "sgm_left_near")
-    entry = _read_file(m, chosen, column(t.left_reference - 1 - early - read)[:index],
+    entry = _read_file(m, chosen, column_at(t.left_reference - 1 - early - read)[:index],
                        "sgm_left_chosen_at")
     if read:
         entry = register(m, entry, bits, "sgm_left_chosen")
