@@ -212,15 +212,13 @@ def delay(m, en, value, steps, name):
 
 
 def round_base(m, slots, offset, step, start=0):
-    """``start`` + round * ``step`` at ``offset`` (the round's first disparity), without a
-    multiplier: a register that restarts at ``start`` with each slot and adds ``step``
-    every clock."""
+    """``start`` + round * ``step`` at ``offset`` (``start`` 0: the round's first disparity),
+    no multiplier: a register that restarts at ``start`` with each slot, + ``step`` a clock."""
     if slots.rounds == 1:
         return Const(start)
     assert offset >= 1, "the counter restarts from the slot pulse a clock ahead"
-    suffix = f"_from{start}" if start else ""
     value = Signal(range(start + slots.rounds * step),
-                   name=f"{slots.name}_round_base{offset}{suffix}")
+                   name=f"{slots.name}_round_base{offset}" + (f"_from{start}" if start else ""))
     restart = (value == start + (slots.rounds - 1) * step) | slots.first(offset - 1)
     m.d.sync += value.eq(Mux(restart, start, value + step))
     return value

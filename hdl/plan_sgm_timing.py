@@ -10,7 +10,8 @@ from .plan_structure import choice_levels, row_banks
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS", "sgm_row_clocks", "SGM_ABOVE_EVERY",
-           "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS", "sgm_left_pairs", "sgm_left_stages", "sgm_left_firsts_registered",
+           "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS", "sgm_left_pairs", "sgm_left_stages",
+           "sgm_left_firsts_registered",
            "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "sgm_delays",
            "FifthTiming", "sgm_fifth_timing"]
 
@@ -249,7 +250,8 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
-                     history, sum_clocks, sum_late, start_early, start_read, picks, chain, chain_at, chain_history, left, rows,
+                     history, sum_clocks, sum_late, start_early, start_read, picks, chain,
+                     chain_at, chain_history, left, rows,
                      above, rows + tree + rounds, summed)
 
 
