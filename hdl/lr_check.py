@@ -76,7 +76,7 @@ def _low_comparisons(m, x, base, difference, units, copies_of_difference, copies
     census 7x7 SGM's critical path there (8.17 ns, 11 levels).
     """
     low_bits = bits_for(units - 1)
-    if isinstance(base, Const):
+    if slots.rounds == 1:       # the base is 0: x itself against 2^bits
         above_early = difference >= (1 << low_bits)
         within_early = (difference >= 0) & (difference < (1 << low_bits))
     else:

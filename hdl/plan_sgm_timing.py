@@ -184,8 +184,10 @@ def sgm_timing(params, every=DEFAULT_EVERY):
         return tuple(max(tree + 1, history, argmin + history - (age - k) * rounds)
                      for k in range(1, steps)) + (lu - 1,)
 
-    def margins(picks, sum_clocks):
-        return all(at + rounds + 2 <= k * rounds + reference - sum_clocks
+    def margins(picks, sum_clocks, first_clocks=None):
+        # (``first_clocks``: C(x - 1, b(x))'s own where it is read apart from the others.)
+        return all(at + rounds + 2 <= k * rounds + reference - (
+                       first_clocks if k == 1 and first_clocks is not None else sum_clocks)
                    for k, at in enumerate(picks[:-1], 1))
     # The argmin tree over Lu(x, .) takes two clocks a level (the comparison, then the
     # choice) where the margins still allow both two-clock multiplexers below: a level's
@@ -209,9 +211,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # R = 4 (7.81 ns, 8 levels, 128.1 MHz).
     # (P2 joins the others' terms, so it must be there: not with one lane, T = 0.)
     late, rest = SGM_LEFT_LATE_CLOCKS
-    sum_late = (reference - rest + 1 >= SGM_GUIDE_CLOCKS
-                and all(at + rounds + 2 <= k * rounds + reference - (late if k == 1 else rest)
-                        for k, at in enumerate(picks[:-1], 1)))
+    sum_late = reference - rest + 1 >= SGM_GUIDE_CLOCKS and margins(picks, rest, late)
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)

@@ -127,8 +127,7 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
         terms.append(owner._aligned(p2, t.guide, t.left_reference - 1 - first_level,
                                      "sgm_left_p2"))
         if first_level:
-            terms = [register(m, v, len(v), f"sgm_left_pair{k}")
-                     for k, v in enumerate(level(terms))]
+            terms = registered(level(terms), "sgm_left_pair")
         while len(terms) > 1:
             terms = level(terms)
         total = register(m, terms[0][:bits], bits, "sgm_left_csum")
