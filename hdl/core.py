@@ -43,6 +43,7 @@ from .evaluation_stage import EvaluationStage
 from .input_stage import InputStage
 from .lr_check import LRCheck
 from .median import Median3
+from .mirror import RowTurn, reversed_sums
 from .plan import check_buildable
 from .plan_structure import masks_after_compare
 from .plan_timing import core_timing, decision_clocks, latency
@@ -104,7 +105,11 @@ class NpStereoCore(wiring.Component):
         # Offsets (clocks after admission) where each stage's input is slot-aligned.
         self.calculation_at, self.sums_at = timing.calculation, timing.sums
         self.evaluation_at = timing.evaluation
-        self.lr_check = LRCheck(params, timing.left - timing.sums, timing.sums)
+        self.check_at = timing.check
+        self.lr_check = LRCheck(params, timing.left - timing.check, timing.check)
+        #: With the fifth path: the words of the mirrored rows turned round.
+        self.row_turn = RowTurn(params, len(self.lr_check.disparity_out)) \
+            if params.fifth_path else None
         self.median = Median3(params, len(self.lr_check.disparity_out)) if params.median \
             else None
         self.clock_latency = timing.output
@@ -424,9 +429,15 @@ class NpStereoCore(wiring.Component):
                                   self.evaluation_at - self.sums_at, "evaluation_tag")),
             ev.first.eq(slots.first(self.evaluation_at)),
             ev.round.eq(slots.round(self.evaluation_at)),
-            lr.sums.eq(calc.sums), lr.tag.eq(calc.centre),
-            lr.first.eq(slots.first(self.sums_at)), lr.round.eq(slots.round(self.sums_at)),
+            lr.first.eq(slots.first(self.check_at)), lr.round.eq(slots.round(self.check_at)),
         ]
+        if p.fifth_path and p.lr_check:
+            sums = reversed_sums(m, p, slots, calc.sums, self.sums_at, "lr_reversed_sums")
+            m.d.comb += [lr.sums[i].eq(value) for i, value in enumerate(sums)]
+            m.d.comb += lr.tag.eq(slots.delay(calc.centre, self.sums_at,
+                                              self.check_at - self.sums_at, "lr_tag"))
+        else:
+            m.d.comb += [lr.sums.eq(calc.sums), lr.tag.eq(calc.centre)]
         if self.subpixel is None:
             m.d.comb += [lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out)]
         else:
@@ -445,15 +456,26 @@ class NpStereoCore(wiring.Component):
 
 
     def _output_words(self, m, lr):
-        """The stage whose words go to the output queue: the L/R check's, or the 3x3
-        median of them (one tick out per tick in, so the credits balance either way)."""
+        """The stage whose words go to the output queue: the L/R check's, turned round
+        with the fifth path, or the 3x3 median of them (each one tick out per tick in, so
+        the credits balance either way)."""
+        words = (lr.retire, lr.produce, lr.valid, lr.disparity_out, lr.x, lr.y)
+        flags = (lr.frame_start, lr.line_end, lr.frame_end)
+        if self.row_turn is not None:
+            m.submodules.row_turn = turn = self.row_turn
+            m.d.comb += [turn.retire.eq(lr.retire), turn.produce.eq(lr.produce),
+                         turn.valid.eq(lr.valid), turn.disparity.eq(lr.disparity_out),
+                         turn.x.eq(lr.x), turn.y.eq(lr.y)]
+            words = (turn.retire_out, turn.produce_out, turn.valid_out, turn.disparity_out,
+                     turn.x_out, turn.y_out)
+            flags = (turn.frame_start, turn.line_end, turn.frame_end)
         if self.median is None:
-            return _Words(lr.retire, lr.produce, lr.valid, lr.disparity_out, lr.frame_start,
-                          lr.line_end, lr.frame_end)
+            return _Words(*words[:4], *flags)
         m.submodules.median = median = self.median
-        m.d.comb += [median.retire.eq(lr.retire), median.produce.eq(lr.produce),
-                     median.valid.eq(lr.valid), median.disparity.eq(lr.disparity_out),
-                     median.x.eq(lr.x), median.y.eq(lr.y)]
+        retire, produce, valid, disparity, x, y = words
+        m.d.comb += [median.retire.eq(retire), median.produce.eq(produce),
+                     median.valid.eq(valid), median.disparity.eq(disparity),
+                     median.x.eq(x), median.y.eq(y)]
         return _Words(median.retire_out, median.produce_out, median.valid_out,
                       median.disparity_out, median.frame_start, median.line_end,
                       median.frame_end)

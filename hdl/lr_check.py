@@ -90,12 +90,14 @@ def _low_comparisons(m, x, base, difference, units, copies_of_difference, copies
     def at_least(k, i):
         if i == 0:    # the low bits are >= 0 always (a constant comparison fails lint)
             return above[k] | within[k]
+        if i >= 1 << low_bits:     # and never as large (the mirrored row's last unit)
+            return above[k]
         return above[k] | (within[k] & (copies_of_difference[k][:low_bits] >= i))
     return at_least
 
 
 def _lookahead(m, i, early_cost, previous_cost, previous_held, held, previous_wins,
-               writing):
+               writing, beats):
     """Whether unit ``i``'s candidate beats the word it holds (R = 1), from comparisons
     made a clock ahead.
 
@@ -113,7 +115,7 @@ def _lookahead(m, i, early_cost, previous_cost, previous_held, held, previous_wi
         # Unit 0's word is never written at R = 1 (its candidate is always fresh): it
         # stays 0, which no cost is less than (and a comparison with it fails lint).
         del against["passed"]
-    ahead = {name: register(m, better(early_cost, value), 1, f"lr_ahead_{name}{i}")
+    ahead = {name: register(m, beats(early_cost, value), 1, f"lr_ahead_{name}{i}")
              for name, value in against.items()}
     won = register(m, previous_wins, 1, f"lr_won{i - 1}")
     wrote = register(m, writing, 1, f"lr_wrote{i}")
@@ -160,6 +162,9 @@ class LRCheck(wiring.Component):
 
     def __init__(self, params, left_offset, slot_base=0):
         self.params, self.left_offset, self.slot_base = params, left_offset, slot_base
+        #: The positions arrive in mirrored order, x' = W - 1 - x (the fifth path's rows,
+        #: :mod:`.sgm_right`), and their sums in reversed order (:func:`.mirror.reversed_sums`).
+        self.mirrored = params.fifth_path
         depth, rounds, units = params.disparities, params.rounds, params.per_round
         timing = lr_timing(params, left_offset)
         #: Offset of the final dR leaving the last unit (see elaborate()).
@@ -185,6 +190,15 @@ class LRCheck(wiring.Component):
     def _in_frame(self, tag):
         return tag.live & (tag.y >= 0) & (tag.y < self.params.height)
 
+    def _placed(self, x, d=None):
+        """x lies outside the invalid border and (given ``d``) its right pixel x - d in the
+        row. Mirrored (x the raster column W - 1 - x'), the border alone: x >= D > d."""
+        p = self.params
+        if self.mirrored:
+            return x <= p.width - 1 - p.first_valid_column
+        border = x >= p.first_valid_column
+        return border if d is None else (x >= d) & border
+
     def elaborate(self, platform):
         p = self.params
         m = Module()
@@ -196,7 +210,7 @@ class LRCheck(wiring.Component):
                              self.produce.eq(tag.valid & self._in_frame(tag))]
             with m.Else():
                 m.d.sync += [self.retire.eq(0), self.produce.eq(0)]
-            m.d.sync += [self.valid.eq(tag.x >= p.first_valid_column),
+            m.d.sync += [self.valid.eq(self._placed(tag.x)),
                          self.disparity_out.eq(self.value if p.subpixel_bits
                                                 else self.disparity),
                          self.x.eq(tag.x), self.y.eq(tag.y),
@@ -239,17 +253,27 @@ class LRCheck(wiring.Component):
         # one register for all 64 units' comparisons was census 5x5's critical path at
         # 1280 x 720, D = 64, R = 1 (6.2 ns of routing to the farthest unit, ECP5).
         base = round_base(m, slots, 1, units)
-        difference = tag.x - base
+        # Mirrored, unit i's candidate d' = j*D/R + i is d = D - 1 - d' of right pixel
+        # x' + d, inside the row iff d' >= x' + D - W: not (x' + D - W) - j*D/R >= i + 1.
+        x = slots.delay(self.tag.x + (p.disparities - p.width), 0, 1, "lr_reach") \
+            if self.mirrored else tag.x
+        difference = x - base
         # The row's comparisons with the frame a clock ahead, from the input tag.
         framed = tag.valid & tag.live & row_inside_ahead(m, self.tag.y, 0, p.height, "lr_row")
         copies = range(-(-units // LR_UNITS_PER_COPY))
-        x_minus_base = [replica(m, difference, f"lr_x_minus_base{k}",
-                                Shape.cast(range(-p.disparities, p.width)),
+        span = range(-p.width - p.disparities, p.disparities) if self.mirrored else \
+            range(-p.disparities, p.width)
+        x_minus_base = [replica(m, difference, f"lr_x_minus_base{k}", Shape.cast(span),
                                 reset_less=True) for k in copies]
         in_frame = [replica(m, framed, f"lr_in_frame{k}") for k in copies]
         stage_a, stage_b = LR_STAGE_A, lr_stage_b(p)
-        at_least = _low_comparisons(m, tag.x, base, difference, units, x_minus_base, copies,
+        at_least = _low_comparisons(m, x, base, difference, units, x_minus_base, copies,
                                     slots)
+        if self.mirrored:
+            beyond = at_least
+
+            def at_least(k, i):
+                return ~beyond(k, i + 1)
         # With R >= 3 the word read in stage A is registered before it is compared (a LUT
         # RAM read and a carry chain in one clock were 7.3 ns, census 7x7 on ECP5): the
         # write then lands two clocks after the next unit's read of that word, which
@@ -263,6 +287,9 @@ class LRCheck(wiring.Component):
         writing = _write_enables(slots, tag.valid, stage_b, units)
         last = slots.first(stage_b + rounds - 1) if rounds > 1 else Const(1)
         stores = [Store(m, f"right_winners{i}", entry, rounds) for i in range(units)]
+        # Mirrored, a right pixel's candidates come from the highest d down: the later of
+        # equal costs is the lower d, which keeps a tie.
+        beats = (lambda candidate, best: candidate <= best) if self.mirrored else better
         updated_words, framed_late = [], {}
         wins = previous_cost = None          # unit i - 1's, for unit i's lookahead
         for i, store in enumerate(stores):
@@ -291,7 +318,7 @@ class LRCheck(wiring.Component):
                 word = store.read(read_address)
                 if split:
                     word = pipe(m, word, 1, f"right_winner{i}_read")
-                m.d.sync += [held.eq(word), lower.eq(better(early_cost, word.cost))]
+                m.d.sync += [held.eq(word), lower.eq(beats(early_cost, word.cost))]
                 fresh = slots.first(stage_b)
             else:
                 # With R = 1 the word is written in every clock: it is compared a clock
@@ -300,7 +327,7 @@ class LRCheck(wiring.Component):
                 held = store.read(0)
                 if i:
                     lower = _lookahead(m, i, early_cost, previous_cost,
-                                       stores[i - 1].read(0), held, wins, writing[i])
+                                       stores[i - 1].read(0), held, wins, writing[i], beats)
             previous_cost = cost
             if i == 0 and rounds == 1:
                 wins = ok            # every right pixel's first candidate: always fresh
@@ -308,7 +335,13 @@ class LRCheck(wiring.Component):
                 empty = held.empty | fresh if i == 0 else held.empty
                 wins = ok & (empty | lower)
             candidate = Signal(d_bits, name=f"candidate_d{i}", reset_less=True)
-            m.d.sync += candidate.eq(first_disparity + i)
+            m.d.sync += candidate.eq(p.disparities - 1 - i - first_disparity
+                                     if self.mirrored else first_disparity + i)
+            if self.mirrored and i == 0:
+                # A right pixel's first candidates lie before its row when mirrored
+                # (x' + d > W - 1): its word starts empty, not from the stale one.
+                held = Mux(fresh, entry.const({"empty": 1}), held) if rounds > 1 else \
+                    entry.const({"empty": 1})
             updated = Signal(entry, name=f"updated{i}")
             m.d.comb += updated.eq(Mux(wins, Cat(cost, candidate, Const(0, 1)), held))
             updated_words.append(updated)
@@ -385,9 +418,12 @@ class LRCheck(wiring.Component):
         # behind it were 6.8-7.3 ns (census and rank 7x7 on ECP5).
         entry = pipe(m, left_read.data, 1, "checked_left")
         early = pipe(m, entry, 1, "checked_left_early")
-        checked_index = pipe(m, checked_address, 3, "checked_index")
+        # Mirrored, the partner of x' is x' + dL, position n - (D - 1 - dL).
+        checked_index = pipe(m, checked_address + (1 - depth) if self.mirrored else
+                             checked_address, 3, "checked_index")
         partner_address = Signal(index_shape, name="partner_address", reset_less=True)
-        m.d.sync += partner_address.eq(checked_index - early.d)
+        m.d.sync += partner_address.eq(checked_index + early.d if self.mirrored else
+                                       checked_index - early.d)
         m.d.comb += history_read.addr.eq(partner_address)
         partner = pipe(m, history_read.data, 2, "partner")
         checked = pipe(m, entry, 6, "checked_left_late")
@@ -395,8 +431,7 @@ class LRCheck(wiring.Component):
         # What does not depend on dR is decided while dR is read.
         placed = Signal(name="checked_placed")
         in_frame = Signal(name="checked_in_frame")
-        m.d.sync += [placed.eq((early.tag.x >= early.d) &
-                               (early.tag.x >= p.first_valid_column)),
+        m.d.sync += [placed.eq(self._placed(early.tag.x, early.d)),
                      in_frame.eq(self._in_frame(early.tag))]
         kept = pipe(m, placed, 4, "checked_placed")
         in_frame = pipe(m, in_frame, 4, "checked_in_frame")

@@ -16,8 +16,8 @@ from .common import delay_line_rings, lane_groups, tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, row_banks, store_slices,
                              vertical_bits, window_rows)
-from .plan_timing import core_timing, lr_timing, sgm_delays, sgm_left_pairs, \
-    sgm_left_shift_store
+from .plan_timing import core_timing, lr_timing, sgm_delays, sgm_fifth_forwarded, \
+    sgm_left_pairs, sgm_left_shift_store
 from .trees import DEFAULT_EVERY
 
 __all__ = ["MemoryUse", "memories", "memory_bits", "sgm_memories", "built_memories",
@@ -85,7 +85,7 @@ def memories(params, every=DEFAULT_EVERY):
     if p.lr_check:
         d_bits = max(1, (p.disparities - 1).bit_length())
         timing = core_timing(p, every)
-        history = lr_timing(p, timing.left - timing.sums).history
+        history = lr_timing(p, timing.left - timing.check).history
         if rounds > 1:
             result.append(MemoryUse("right winners", units, rounds,
                                     p.aggregated_cost_bits + d_bits + 1, ASYNC))
@@ -94,6 +94,14 @@ def memories(params, every=DEFAULT_EVERY):
         result.append(MemoryUse("left winners", 1, history,
                                 tag_layout(p).size + d_bits + value, BLOCK))
         result.append(MemoryUse("dR history", 1, history, d_bits, BLOCK))
+    if p.fifth_path:
+        # hdl/mirror.py: the L/R check's sums reversed (R > 1), and a row of output words
+        # (two flags and the output disparity) turned round.
+        if rounds > 1 and p.lr_check:
+            result.append(MemoryUse("reversed sums ring", 1, 1 << (2 * rounds - 1).bit_length(),
+                                    units * p.aggregated_cost_bits, ASYNC))
+        result.append(MemoryUse("output row", 1, p.width, p.output_disparity_bits + 2,
+                                layout=LINES))
     if p.median:
         # Median3's line buffers: the entry (key of the output value's bits + 1, word
         # flag, four edge flags) and the key of the row above; with F > 0 the value
@@ -144,8 +152,8 @@ def sgm_memories(params, every=DEFAULT_EVERY):
     from R = 3 (registers below, ``plan_timing.sgm_left_shift_store``, ``sgm_left_pairs``) the left
     path's Lu(x - 1, .) and Lu(x - 1, .) + P1 (2 D/R values of ``left_loop_bits`` per
     round) and the first of them + P1 again (the neighbour across the next round's edge). With the fifth path
-    (:mod:`.sgm_right`) its recursion's two stores again, and three rows of W R words in
-    block RAM: the costs (and P2), S4 and S5.
+    (:mod:`.sgm_right`) its recursion's two stores again, and two rows of W R words in
+    block RAM: the costs (and P2) and S4.
     """
     p = params
     word = p.per_round * p.path_cost_bits
@@ -178,16 +186,17 @@ def sgm_memories(params, every=DEFAULT_EVERY):
         result += [MemoryUse(f"delay line ({key})", copies * count, depth, width, ASYNC)
                    for (width, depth), count in sorted(rings.items())]
     if p.fifth_path:
-        # hdl/sgm_right.py: a row of the costs (and the left path's P2 when adaptive), of
-        # S4 and of S5, one word per (column, round).
+        # hdl/sgm_right.py: a row of the costs (and the left path's P2 when adaptive) and
+        # of S4, one word per (column, round), banked as the path rows.
         adaptive = p.p2_adapt != P2_ADAPT_OFF
         p2_bits = max(1, p.p2.bit_length()) if adaptive else 0
         depth = p.width * p.rounds
-        result += [MemoryUse("fifth path costs row", 1, depth,
-                             p.per_round * p.cost_bits + p2_bits, layout=LINES),
-                   MemoryUse("fifth path S4 row", 1, depth,
-                             p.per_round * sgm_summed_cost_bits(p.max_cost, p.p2),
-                             layout=LINES),
-                   MemoryUse("fifth path S5 row", 1, depth,
-                             p.per_round * p.aggregated_cost_bits, layout=LINES)]
+        rows = [MemoryUse("fifth path costs row", 1, depth,
+                          p.per_round * p.cost_bits + p2_bits, layout=BANKED),
+                MemoryUse("fifth path S4 row", 1, depth,
+                          p.per_round * sgm_summed_cost_bits(p.max_cost, p.p2), layout=BANKED)]
+        # The words each row forwards (written while a read is in its banks) in delay lines.
+        result += rows + [MemoryUse("fifth path forwarded words", 1, ring_depth, bits, ASYNC)
+                          for row in rows for k in sgm_fifth_forwarded(p)
+                          for bits, ring_depth in delay_line_rings(row.width, k)]
     return result

@@ -6,14 +6,14 @@ functions of the parameters: the part of :mod:`.plan_timing` for semi-global agg
 from dataclasses import dataclass
 
 from ..params import SGM_ROW_PATHS, SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .plan_structure import choice_levels, row_banks
+from .plan_structure import banked_read_clocks, row_banks
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS", "sgm_row_clocks", "SGM_ABOVE_EVERY",
            "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS", "sgm_left_pairs", "sgm_left_stages",
            "sgm_left_firsts_registered",
            "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "sgm_delays",
-           "FifthTiming", "sgm_fifth_timing"]
+           "FifthTiming", "sgm_fifth_timing", "sgm_fifth_forwarded"]
 
 
 #: Clocks from the SGM stage's input to each path's P2: the intensity differences, their
@@ -35,8 +35,7 @@ def sgm_row_clocks(params):
     path rows in several banks (W R words, :func:`~.plan_structure.row_banks`) a clock more
     for the register behind each bank's and a clock more per level of the bank's choice
     (:func:`~.banks.banked_memory`)."""
-    banks = len(row_banks(params))
-    return SGM_ROW_CLOCKS + (1 + choice_levels(banks) if banks > 1 else 0)
+    return SGM_ROW_CLOCKS - banked_read_clocks(1) + banked_read_clocks(len(row_banks(params)))
 
 
 #: Register spacing of the sum of the three paths from above: every level (two additions
@@ -271,13 +270,28 @@ class FifthTiming:
     costs: int          #: the costs row (C and the left path's P2) is read
     four: int           #: the four paths' sum S4 (its row is read a clock before)
     right: int          #: L_right of the previous row, mirrored (the recursion's output)
-    latency: int        #: S5 of the row before that, in raster order (its row's read data)
+    latency: int        #: S5 of the previous row, mirrored (registered after the addition)
+
+
+def sgm_fifth_forwarded(params):
+    """Clocks k between a word's write and a read of its address that the fifth path's
+    rows (``sgm_right._turnaround``) forward, their read being issued ``ahead`` clocks
+    before its word is there (:func:`~.plan_structure.banked_read_clocks`): 0 < k <
+    ``ahead``. A word's address is its round's too, and slots are R clocks, so only
+    multiples of R occur (a row's first positions reading the column its last ones wrote).
+    """
+    ahead = banked_read_clocks(len(row_banks(params)))
+    return list(range(params.rounds, ahead, params.rounds))
 
 
 def sgm_fifth_timing(params, every=DEFAULT_EVERY):
     """The fifth path's offsets: the costs row read as late as lets the recursion (the left
-    path's ``left`` clocks) end where S4 is there, or later, S5 registered after both."""
+    path's ``left`` clocks) end where S4 is there, or later (and no earlier than its banks'
+    read takes from the input), S5 registered after both."""
     t = sgm_timing(params, every)
-    costs = max(t.guide, t.latency - t.left - 1)
+    # The costs row's read is issued that many clocks before its word is there
+    # (``sgm_right._turnaround``), with the column slot-aligned at the stage's input.
+    ahead = banked_read_clocks(len(row_banks(params)))
+    costs = max(t.guide, t.latency - t.left - 1, ahead - 1)
     right = costs + 1 + t.left
     return FifthTiming(costs, t.latency, right, right + 1)

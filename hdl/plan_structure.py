@@ -17,7 +17,8 @@ __all__ = ["output_width", "transform_plan", "census_registers_compared",
            "STORE_SLICE_BITS", "store_slices", "cost_rows", "transformed_rows", "window_rows",
            "window_first_row", "window_pixels", "masks_after_compare", "vertical_bits",
            "vertical_plan", "horizontal_plan", "row_sum_plan", "BANK_CHOICE", "COST_BANK",
-           "cost_banks", "choice_levels", "bank_choice_levels", "ROW_BANK", "ROW_BANK_DEEPEST",
+           "cost_banks", "choice_levels", "banked_read_clocks", "bank_choice_levels",
+           "ROW_BANK", "ROW_BANK_DEEPEST",
            "row_banks"]
 
 
@@ -246,6 +247,14 @@ def choice_levels(banks):
     while banks > BANK_CHOICE:
         levels, banks = levels + 1, -(-banks // BANK_CHOICE)
     return levels
+
+
+def banked_read_clocks(banks):
+    """Clocks from :func:`~.banks.banked_memory`'s early read address to its word, for a
+    memory in ``banks`` banks: the address register, the read and the block RAM's output
+    register, and with several banks a clock more for the register behind each bank's and
+    one per level of the bank's choice."""
+    return 3 + (1 + choice_levels(banks) if banks > 1 else 0)
 
 
 def bank_choice_levels(params):

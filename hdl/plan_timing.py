@@ -18,7 +18,8 @@ from .median import MEDIAN_LATENCY
 from .plan_sgm_timing import (SGM_ABOVE_EVERY, SGM_GUIDE_CLOCKS,  # noqa: F401
                               SGM_LEFT_LATE_CLOCKS, SGM_LEFT_LEAD, SGM_ROW_CLOCKS,
                               FifthTiming, SgmTiming, sgm_delays,
-                              sgm_fifth_timing, sgm_left_firsts_registered,
+                              sgm_fifth_forwarded, sgm_fifth_timing,
+                              sgm_left_firsts_registered,
                               sgm_left_pairs, sgm_left_shift_store, sgm_left_stages,
                               sgm_row_clocks, sgm_timing, sgm_tree_clocks)
 from .trees import DEFAULT_EVERY, min_tree_latency
@@ -30,6 +31,7 @@ __all__ = ["INPUT_LATENCY", "decision_clocks", "MAX_SKEW_ONE_ROUND", "unit_skews
            "sgm_left_stages",
            "sgm_left_firsts_registered", "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "sgm_left_pairs", "sgm_delays", "FifthTiming", "sgm_fifth_timing",
+           "sgm_fifth_forwarded", "reversed_sums_clocks", "ROW_TURN_LATENCY",
            "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
@@ -251,11 +253,26 @@ def lr_timing(params, left):
     return LRTiming(left, exit_, history, exit_ + 9)
 
 
+def reversed_sums_clocks(params):
+    """Clocks by which the L/R check's sums are late on mirrored rows (the fifth path, with
+    the check), candidates in reversed order (:func:`~.mirror.reversed_sums`): R + 1 with R > 1 (a
+    slot's rounds turned round), 0 at R = 1 (its lanes only)."""
+    mirrored = params.fifth_path and params.lr_check
+    return params.rounds + 1 if mirrored and params.rounds > 1 else 0
+
+
+#: Clocks from a tick into :class:`~.mirror.RowTurn` to its word: the tick's register
+#: (with both addresses), the read, the block RAM's output register, the forwarded word's
+#: choice into the output registers.
+ROW_TURN_LATENCY = 4
+
+
 @dataclass(frozen=True)
 class CoreTiming:
     """Offsets of the stages' inputs, in clocks after a slot's admission."""
     calculation: int    #: the windows (calculation stage's input)
-    sums: int           #: the aggregated sums (L/R check's input)
+    sums: int           #: the aggregated sums
+    check: int          #: the L/R check's input (the sums, reversed on mirrored rows)
     evaluation: int     #: the partition winners (evaluation stage's input)
     left: int           #: the left winners (slot-aligned)
     output: int         #: a position's retire pulse and word, before the output queue
@@ -278,11 +295,14 @@ def core_timing(params, every=DEFAULT_EVERY):
     sums = calculation + timing.sums
     evaluation = calculation + timing.latency
     left = evaluation + evaluation_latency(params) + subpixel_clocks(params)
-    output = sums + lr_timing(params, left - sums).latency
+    check = sums + reversed_sums_clocks(params)
+    output = check + lr_timing(params, left - check).latency
+    if params.fifth_path:
+        output += ROW_TURN_LATENCY
     if params.median:
         output += MEDIAN_LATENCY
     depth = 1 << (-(-(output + CREDIT_RETURN) // params.rounds) + 4).bit_length()
-    return CoreTiming(calculation, sums, evaluation, left, output, depth)
+    return CoreTiming(calculation, sums, check, evaluation, left, output, depth)
 
 
 def latency(params):

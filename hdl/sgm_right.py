@@ -11,10 +11,10 @@ slots that carry a position, so the order of the columns is the only thing that 
 Inside the SGM stage (:func:`fifth_path`, docs/hardware.md "The fifth path"): while row
 y + 1 streams in, slot x of it reads column W - 1 - x of row y from row buffers whose
 address direction alternates every row (a word is read, then rewritten with row y + 1's
-word a clock later), runs the recursion on it and adds L_right to row y's S4; the sums S5
-of row y, mirrored, go into one more such buffer, which gives them back in raster order
-while row y + 2 streams in. The stage's interface is unchanged; its sums trail the
-positions that carry them by two rows (``centre`` names theirs).
+word a clock later), runs the recursion on it and adds L_right to row y's S4. The sums S5
+of row y leave in mirrored order, slot x carrying column W - 1 - x: ``centre`` names them
+(x' = x, the row before), and the back end works on the mirrored row (the L/R check's
+mirrored mode, :mod:`.mirror`), whose output words alone are turned round.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
@@ -22,10 +22,11 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
-from .banks import line_memory
-from .common import SlotClock, bits_for, register, split_lanes, tag_layout, taps, \
-    y_range
-from .plan_timing import sgm_fifth_timing, sgm_timing
+from .banks import banked_memory
+from .common import SlotClock, bits_for, delay_line, pipe, register, split_lanes, \
+    tag_layout, taps, y_range
+from .plan_structure import banked_read_clocks, row_banks
+from .plan_timing import sgm_fifth_forwarded, sgm_fifth_timing, sgm_timing
 from .sgm_left import PathOwner, left_path
 
 __all__ = ["RightPathRecursion", "fifth_path"]
@@ -93,31 +94,46 @@ class RightPathRecursion(PathOwner, wiring.Component):
 
 
 def _turnaround(owner, m, name, width, offset, column, data):
-    """A row of words (W R of ``width`` bits) read at ``column`` (slot-aligned at 0) and
-    the round at ``offset``, the word read out a clock later, when ``data`` is written in
-    its place. ``column`` alternates its direction every row, so the word read is the
-    previous row's at the mirrored column. The row's last position and the next row's first
-    share a column: at R = 1 the second reads it in the clock the first writes it, and is
-    given the word written (the block RAM's ports do not order a read and a write of one
-    address in one clock)."""
+    """A row of words (W R of ``width`` bits) whose word at ``column`` (slot-aligned at 0)
+    and the round at ``offset`` comes out at ``offset`` + 1, when ``data`` is written in its
+    place. ``column`` alternates its direction every row, so the word read is the previous
+    row's at the mirrored column.
+
+    The row is cut into :func:`~.plan_structure.row_banks` banks (:func:`.banks.banked_memory`,
+    block RAMs full at any depth: one memory W R deep was a cascade 62.5 % full at 1280 x
+    720), so the read is issued :func:`~.plan_structure.banked_read_clocks` clocks ahead
+    and the words written meanwhile are forwarded (:func:`_forwarded`)."""
     p, slots = owner.params, owner._slots
-    depth = p.width * p.rounds
-    memory = line_memory(m, name, unsigned(width), depth)
-    at = owner._aligned(column, 0, offset, f"{name}_column")
-    address = at * p.rounds + slots.round(offset) if p.rounds > 1 else at
-    written = register(m, address, range(depth), f"{name}_write_address")
-    enable = owner._valid_at(offset + 1)
-    m.d.comb += [memory.read_addr.eq(address), memory.write_addr.eq(written),
-                 memory.write_data.eq(data), memory.write_en.eq(enable)]
-    return _forwarded(m, name, address, written, enable, data, memory.read_data)
+    banks = row_banks(p)
+    ahead = banked_read_clocks(len(banks))
+    issued = offset + 1 - ahead
+    at = owner._aligned(column, 0, issued, f"{name}_column")
+    early = at * p.rounds + slots.round(issued) if p.rounds > 1 else at
+    address = Signal(range(p.width * p.rounds), name=f"{name}_read_early")
+    m.d.comb += address.eq(early)
+    written = pipe(m, address, ahead - 1, f"{name}_write_early")
+    word = banked_memory(m, name, unsigned(width), banks, address, written, data,
+                         owner._valid_at(offset))
+    return _forwarded(m, name, address, ahead, owner._valid_at(offset + 1), data, word,
+                      sgm_fifth_forwarded(p))
 
 
-def _forwarded(m, name, address, written, enable, data, read_data):
-    """``read_data`` of the read at ``address``, or ``data`` where that read met the write
-    of ``data`` at ``written`` in the same clock."""
-    hit = register(m, (address == written) & enable, 1, f"{name}_hit")
-    held = register(m, data, len(data), f"{name}_held")
-    return Mux(hit, held, read_data)
+def _forwarded(m, name, address, ahead, enable, data, read_data, distances):
+    """``read_data``, the word read at ``address`` ``ahead`` clocks ago, or the word
+    written to that address since: ``data`` with its write ``enable``, k clocks ago for k
+    in ``distances`` (:func:`~.plan_timing.sgm_fifth_forwarded`). A row's first positions
+    read the column its last ones wrote: the word is forwarded from the previous row (the
+    block RAM's ports do not order a read and a write of one address in one clock)."""
+    value = read_data
+    for k in sorted(distances, reverse=True):
+        # Compared a clock ahead, between registers.
+        hit = register(m, (pipe(m, address, ahead - 1, f"{name}_reader") ==
+                           pipe(m, address, ahead - 1 + k, f"{name}_writer{k}")) &
+                       pipe(m, enable, k - 1, f"{name}_writing{k}", reset=True), 1,
+                       f"{name}_hit{k}")
+        held = delay_line(m, data, k, f"{name}_held{k}")
+        value = Mux(hit, held, value)
+    return value
 
 
 def _direction(mirror, starts):
@@ -137,21 +153,19 @@ def fifth_path(owner, m, four, p2_left):
     f = sgm_fifth_timing(p, owner.every)
     units, width = p.per_round, p.width
     cost_bits, four_bits = p.cost_bits, sgm_summed_cost_bits(p.max_cost, p.p2)
-    # Row starts: the address direction flips, and the rows' y are kept two rows back. In
+    # Row starts: the address direction flips, and the rows' y are kept a row back. In
     # a row's first slot the registers change after its first clock, so the values of the
     # slot are formed from their old contents there (R clocks alike).
     starts = slots.first(0) & tag.valid & (tag.x == 0)
     mirror = Signal(name="sgm_fifth_mirror")
     mirrored = _direction(mirror, starts)
-    # Reset to a row above every frame: before two rows have passed, no sum is of a
-    # frame row.
+    # Reset to a row above every frame: before a row has passed, no sum is of a frame
+    # row.
     rows = [Signal(tag.y.shape(), name=f"sgm_fifth_row{k}", init=y_range(p)[0])
-            for k in range(3)]
+            for k in range(2)]
     with m.If(starts):
-        m.d.sync += [mirror.eq(mirrored), rows[2].eq(rows[1]), rows[1].eq(rows[0]),
-                     rows[0].eq(tag.y)]
+        m.d.sync += [mirror.eq(mirrored), rows[1].eq(rows[0]), rows[0].eq(tag.y)]
     before = Mux(starts, rows[0], rows[1])           # y of the row before this one
-    two_before = Mux(starts, rows[1], rows[2])       # and of the one before that
     column = Mux(mirrored, width - 1 - tag.x, tag.x)
 
     adaptive = p.p2_adapt != P2_ADAPT_OFF
@@ -184,10 +198,8 @@ def fifth_path(owner, m, four, p2_left):
                        four_bits)
     total = [register(m, s + right.lanes[i], p.aggregated_cost_bits, f"sgm_fifth_s{i}")
              for i, s in enumerate(sums)]
-    # Back into raster order through the last row buffer.
-    out = _turnaround(owner, m, "sgm_fifth_out", units * p.aggregated_cost_bits, f.right,
-                      column, Cat(*total))
+    # S5 of row y leaves in mirrored order while row y + 1 streams in: the back end works
+    # on it so (docs/hardware.md "The fifth path"), and the output words are turned round.
     centre = slots.delay(tag, 0, f.latency, "sgm_fifth_centre")
-    y = owner._aligned(two_before, 0, f.latency, "sgm_fifth_centre_y")
-    lanes = split_lanes(out, units, p.aggregated_cost_bits)
-    return lanes, (centre.x, y, centre.valid, centre.live)
+    y = owner._aligned(before, 0, f.latency, "sgm_fifth_centre_y")
+    return total, (centre.x, y, centre.valid, centre.live)

@@ -85,9 +85,12 @@ def measured_flush(params):
 
 
 def _last_word(ctx, core, params):
-    """The frame's last word leaves the core's last stage (the 3x3 median's, when on)."""
+    """The frame's last word leaves the core's last stage (the 3x3 median's, when on, or
+    the mirrored rows' turn-round's, with the fifth path)."""
     if core.median is not None:
         return ctx.get(core.median.produce_out) and ctx.get(core.median.frame_end)
+    if core.row_turn is not None:
+        return ctx.get(core.row_turn.produce_out) and ctx.get(core.row_turn.frame_end)
     lr = core.lr_check
     return (ctx.get(lr.produce) and ctx.get(lr.x) == params.width - 1
             and ctx.get(lr.y) == params.height - 1)

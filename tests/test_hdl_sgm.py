@@ -94,8 +94,8 @@ def drive_slot(ctx, dut, slot, j, stream, width, top, frame_inputs, random_input
 
 def check_stage(params, monkeypatch, seed, bubbles=0.3):
     """Stream a random volume through the stage alone; every S of the frame must be the
-    golden model's. With the fifth path the sums of row y leave while row y + 2 streams in
-    (two rows below the frame close it)."""
+    golden model's. With the fifth path the sums of row y leave while row y + 1 streams in,
+    mirrored: slot x carries column W - 1 - x (a row below the frame closes it)."""
     rng, stream = np.random.default_rng(seed), random.Random(seed)
     width, height, rounds, units = params.width, params.height, params.rounds, \
         params.per_round
@@ -108,7 +108,10 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
     adapt = params.p2_adapt or None
     expected = golden_sgm.aggregate(volume, params.p1, params.p2, guide=guide, adapt=adapt,
                                     max_cost=top, fifth_path=params.fifth_path)
-    late = 2 if params.fifth_path else 0
+    late = 1 if params.fifth_path else 0
+
+    def column(x):
+        return width - 1 - x if params.fifth_path else x
     padded = np.pad(guide, 1)
 
     slots = stage_slots(width, height, stream, bubbles)
@@ -140,7 +143,7 @@ def check_stage(params, monkeypatch, seed, bubbles=0.3):
                     centre = ctx.get(dut.centre)
                     assert (centre.x, centre.y, centre.valid) == (x, y - late, 1)
                     for i in range(units):
-                        got[(y - late, x, j * units + i)] = ctx.get(dut.sums[i])
+                        got[(y - late, column(x), j * units + i)] = ctx.get(dut.sums[i])
             await ctx.tick()
 
     simulate_and_compare(dut, testbench, got, expected, "sums")

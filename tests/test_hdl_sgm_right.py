@@ -15,7 +15,7 @@ from amaranth.hdl import Const
 
 from npstereo.golden import sgm as golden_sgm
 from npstereo.golden.pipeline import disparity_map
-from npstereo.hdl import plan_timing, sgm_right
+from npstereo.hdl import plan_structure, plan_timing, sgm_right
 from npstereo.hdl.sgm_right import RightPathRecursion
 from npstereo.params import StereoParams
 
@@ -140,10 +140,44 @@ def test_broken_stage_baseline_matches(monkeypatch):
 def test_broken_forwarding_is_caught(monkeypatch):
     # Without the word forwarded, a row's first position reads its column a clock too
     # early (R = 1, rows back to back): the previous row's last S4 and costs are stale.
-    monkeypatch.setattr(sgm_right, "_forwarded",
-                        lambda m, name, address, written, enable, data, read_data: read_data)
+    monkeypatch.setattr(sgm_right, "_forwarded", _unforwarded)
     with pytest.raises(AssertionError, match="sums differ"):
         check_stage(FIFTH_BROKEN, monkeypatch, seed=5, bubbles=0)
+
+
+def _unforwarded(m, name, address, ahead, enable, data, read_data, rounds):
+    return read_data
+
+
+def _small_banks(monkeypatch, deepest):
+    """The rows (and the path rows) in banks of 8 words: 3 banks of W R = 22 words (one
+    level of choice, the read 5 clocks ahead), or 6 of 44 at ``deepest`` 8 (two levels, 6
+    clocks ahead)."""
+    monkeypatch.setattr(plan_structure, "ROW_BANK", 8)
+    monkeypatch.setattr(plan_structure, "ROW_BANK_DEEPEST", deepest)
+
+
+@pytest.mark.parametrize("rounds, deepest, ahead", [(1, 16384, 5), (2, 8, 6)])
+def test_stage_with_the_rows_in_banks_matches_golden(monkeypatch, rounds, deepest, ahead):
+    """Words written up to 4 (R = 1) or 5 clocks (R = 2, forwarded at k = 2 and 4) before
+    the row's first positions read them, with and without bubbles."""
+    _small_banks(monkeypatch, deepest)
+    params = FIFTH_BROKEN.replace(disparities=4 * rounds, rounds=rounds)
+    assert plan_structure.banked_read_clocks(len(plan_structure.row_banks(params))) == ahead
+    check_stage(params, monkeypatch, seed=rounds, bubbles=0)
+    check_stage(params, monkeypatch, seed=rounds + 1)
+
+
+def test_broken_forwarding_of_the_last_clock_only_is_caught(monkeypatch):
+    """Only the word written a clock before forwarded (as with a row in one memory read a
+    clock ahead): the words written 2 to 4 clocks before the read are stale."""
+    _small_banks(monkeypatch, 16384)
+    real = sgm_right._forwarded
+    monkeypatch.setattr(sgm_right, "_forwarded",
+                        lambda m, name, address, ahead, enable, data, read_data, rounds:
+                        real(m, name, address, 2, enable, data, read_data, rounds))
+    with pytest.raises(AssertionError, match="sums differ"):
+        check_stage(FIFTH_BROKEN, monkeypatch, seed=1, bubbles=0)
 
 
 def test_broken_fixed_direction_is_caught(monkeypatch):
@@ -160,6 +194,10 @@ CORES = [
     ("census", 3, 4, 1, 3, 20, 2, 1, "layers", 22, 5),             # R = 1
     ("census", 3, 8, 8, 3, 20, 2, 3, "independent", 14, 5),        # R = 8, several rounds
     ("rank", 3, 6, 3, 8, 30, 0, None, "independent", 18, 4),       # R = 3, no check
+    # The check at T = 0 on mirrored rows: every dR must be exact (rounds reversed, R = 4).
+    ("census", 3, 8, 4, 3, 20, 2, 0, "independent", 16, 4),
+    ("census", 3, 4, 1, 3, 20, 2, 0, "flat", 18, 5),             # R = 1, ties
+    ("census", 3, 4, 2, 3, 20, 2, 0, "levels", 12, 5),            # R = 2, ties
 ]
 
 
@@ -235,8 +273,7 @@ def test_icarus_stream_with_the_fifth_path():
     pairs = frames(params)
     assert_bit_exact(cosim.run_stream("icarus", params, pairs, FULL_PLAN))
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(sgm_right, "_forwarded",
-                      lambda m, name, address, written, enable, data, read_data: read_data)
+        patch.setattr(sgm_right, "_forwarded", _unforwarded)
         broken = core_verilog(params)
     result = cosim.run_stream("icarus", params, pairs, FULL_PLAN[:1], core_text=broken)
     assert result.frames and not result.ok
