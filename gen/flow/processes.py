@@ -7,14 +7,20 @@ import subprocess
 import time
 from pathlib import Path
 
-__all__ = ["run_tool"]
+__all__ = ["run_tool", "INTERRUPTED"]
+
+#: How :func:`run_tool`'s failure starts for a tool stopped by a signal from outside (a
+#: user's ``kill``, the kernel's out-of-memory killer): not the design's failure, so its
+#: result is not one to keep.
+INTERRUPTED = "interrupted"
 
 #: Seconds between looks at a running tool's log (:func:`run_tool`'s ``watch``).
 _WATCH_SECONDS = 5.0
 
 
 def run_tool(command, cwd, deadline, log_name, watch=None, name=None, env=None):
-    """Run one tool; returns None or a one-line failure description.
+    """Run one tool; returns None or a one-line failure description (starting with
+    :data:`INTERRUPTED` when a signal from outside stopped it).
 
     The tool runs in a process group of its own so that a timeout kills what it started
     too (native Yosys starts ``yosys-abc`` processes that would outlive their parent).
@@ -46,6 +52,9 @@ def run_tool(command, cwd, deadline, log_name, watch=None, name=None, env=None):
         except BaseException:
             _kill_group(process)
             raise
+    if returncode < 0:
+        return (f"{INTERRUPTED}: {name or Path(command[0]).name} stopped by signal "
+                f"{-returncode}")
     if returncode != 0:
         text = (Path(cwd) / log_name).read_text(errors="replace").splitlines()
         errors = ([line.strip() for line in text if "ERROR" in line]

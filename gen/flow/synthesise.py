@@ -32,7 +32,7 @@ from .capacity import DEFAULT_DEVICE, device as find_device, fit_message, utilis
 from .logic_depth import logic_depth
 from .logs import carry_chains, cell_counts, memory_cells_bits, target_resources, time_split
 from .nextpnr import Placement, place_and_route
-from .processes import run_tool
+from .processes import INTERRUPTED, run_tool
 from .tools import TARGETS, chosen_engine, engine_version
 from .yosys import synthesis_script, yosys_command
 
@@ -132,12 +132,19 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         else:
             result = dict(identity, fmax_mhz=None)
         if failure is not None:
-            result.update(fmax_mhz=None,
-                          status="timeout" if failure == "timeout" else "failed",
+            result.update(fmax_mhz=None, status=_status(failure),
                           message=failure if failure != "timeout" else
                           f"killed after {timeout:g} s")
     result["seconds"] = round(time.monotonic() - started, 1)
     return result
+
+
+def _status(failure):
+    """A failed run's status: ``timeout``, ``interrupted`` (a signal from outside stopped
+    the tool; neither is cached) or ``failed``."""
+    if failure == "timeout":
+        return "timeout"
+    return INTERRUPTED if failure.startswith(INTERRUPTED) else "failed"
 
 
 def _after_synthesis(result, target, build, pnr, freq, deadline, outreg, part, placement):

@@ -81,12 +81,18 @@ def _refusals(params, targets, device):
     return {t: result for t, result in found.items() if result is not None}
 
 
+#: Statuses of results that are not cached: a longer ``--timeout`` or a run left alone
+#: may give another.
+UNKEPT = ("timeout", "interrupted")
+
+
 def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache=None,
                      engine=None, device=DEFAULT_DEVICE, placement=Placement()):
     """Synthesis figures of one configuration for each target, with cycles and frame rate.
 
     Results that are ``ok`` or ``failed`` are cached in ``cache`` (a folder) when given;
-    timeouts are not, so a longer ``--timeout`` retries them. A memory count that differs
+    timeouts and tools stopped by a signal from outside are not (:data:`UNKEPT`), so a
+    longer ``--timeout`` or a run left alone retries them. A memory count that differs
     from the architecture's (:func:`~npstereo.hdl.plan_memories.memory_bits`) is noted in the
     result's message. ``device``: the ECP5 part placed on (:mod:`npstereo.gen.flow.capacity`).
     A target whose device cannot hold the core's memories (the ECP5 part, or
@@ -129,7 +135,7 @@ def synthesis_report(params, targets, pnr=False, freq=150.0, timeout=None, cache
                                  f"architecture's {expected_bits}")
         if result.get("fmax_mhz"):
             result["frames_per_second"] = result["fmax_mhz"] * 1e6 / cycles
-        if path is not None and result["status"] != "timeout":
+        if path is not None and result["status"] not in UNKEPT:
             store_result(path, result)
         results[target] = dict(result, cached=False)
     return _report(params, digest, {t: results[t] for t in targets})
@@ -180,7 +186,7 @@ def store_report(report, cache, pnr, freq, device=DEFAULT_DEVICE):
         return
     params = StereoParams(**report["params"])
     for target, result in report["results"].items():
-        if result["status"] != "timeout" and not result.get("cached") and not refused(result):
+        if result["status"] not in UNKEPT and not result.get("cached") and not refused(result):
             store_result(_path(cache, params, target, pnr, freq, report["verilog_sha"],
                                device), result)
 
