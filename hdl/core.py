@@ -414,6 +414,13 @@ class NpStereoCore(wiring.Component):
         pixels = Signal(PixelPair, reset_less=True)
         m.d.sync += pixels.eq(Mux(taken, raw, 0))
 
+        if p.fifth_path and p.lr_check:
+            sums = reversed_sums(m, p, slots, calc.sums, self.sums_at, "lr_reversed_sums")
+            checked = [*(lr.sums[i].eq(value) for i, value in enumerate(sums)),
+                       lr.tag.eq(slots.delay(calc.centre, self.sums_at,
+                                             self.check_at - self.sums_at, "lr_tag"))]
+        else:
+            checked = [lr.sums.eq(calc.sums), lr.tag.eq(calc.centre)]
         m.d.comb += [
             # The decision itself: the input stage registers it where it is used.
             inp.admit.eq(handed.admit), inp.start.eq(handed.start), inp.overlap.eq(handed.overlap),
@@ -429,15 +436,9 @@ class NpStereoCore(wiring.Component):
                                   self.evaluation_at - self.sums_at, "evaluation_tag")),
             ev.first.eq(slots.first(self.evaluation_at)),
             ev.round.eq(slots.round(self.evaluation_at)),
+            *checked,
             lr.first.eq(slots.first(self.check_at)), lr.round.eq(slots.round(self.check_at)),
         ]
-        if p.fifth_path and p.lr_check:
-            sums = reversed_sums(m, p, slots, calc.sums, self.sums_at, "lr_reversed_sums")
-            m.d.comb += [lr.sums[i].eq(value) for i, value in enumerate(sums)]
-            m.d.comb += lr.tag.eq(slots.delay(calc.centre, self.sums_at,
-                                              self.check_at - self.sums_at, "lr_tag"))
-        else:
-            m.d.comb += [lr.sums.eq(calc.sums), lr.tag.eq(calc.centre)]
         if self.subpixel is None:
             m.d.comb += [lr.disparity.eq(ev.disparity_out), lr.left_tag.eq(ev.tag_out)]
         else:

@@ -35,11 +35,11 @@ from functools import reduce
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
-from amaranth.lib.wiring import In, Out
 
 from ..params import MEDIAN_FILL
 from .banks import line_memory
-from .common import pipe, tag_layout
+from .common import pipe
+from .ticks import tick_ports
 
 __all__ = ["sorting_network", "NETWORK", "network_layers", "MEDIAN_LATENCY", "Median3"]
 
@@ -132,14 +132,7 @@ class Median3(wiring.Component):
     def __init__(self, params, bits):
         self.params, self.bits = params, bits
         self.latency = MEDIAN_LATENCY
-        layout = tag_layout(params)
-        super().__init__({
-            "retire": In(1), "produce": In(1), "valid": In(1), "disparity": In(bits),
-            "x": In(layout["x"].shape), "y": In(layout["y"].shape),
-            "retire_out": Out(1), "produce_out": Out(1), "valid_out": Out(1),
-            "disparity_out": Out(bits),
-            "frame_start": Out(1), "line_end": Out(1), "frame_end": Out(1),
-        })
+        super().__init__(tick_ports(params, bits))
 
     def elaborate(self, platform):
         p, bits = self.params, self.bits

@@ -14,11 +14,12 @@ words of D/R sums (docs/hardware.md, "The fifth path").
 from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
-from amaranth.lib.wiring import In, Out
+from amaranth.lib.wiring import Out
 
 from .banks import line_memory
 from .common import pipe, register, tag_layout, y_range
 from .plan_timing import ROW_TURN_LATENCY, reversed_sums_clocks
+from .ticks import tick_ports
 
 __all__ = ["reversed_sums", "RowTurn"]
 
@@ -77,14 +78,8 @@ class RowTurn(wiring.Component):
         self.params, self.bits = params, bits
         self.latency = ROW_TURN_LATENCY
         layout = tag_layout(params)
-        super().__init__({
-            "retire": In(1), "produce": In(1), "valid": In(1), "disparity": In(bits),
-            "x": In(layout["x"].shape), "y": In(layout["y"].shape),
-            "retire_out": Out(1), "produce_out": Out(1), "valid_out": Out(1),
-            "disparity_out": Out(bits), "x_out": Out(layout["x"].shape),
-            "y_out": Out(layout["y"].shape),
-            "frame_start": Out(1), "line_end": Out(1), "frame_end": Out(1),
-        })
+        super().__init__({**tick_ports(params, bits), "x_out": Out(layout["x"].shape),
+                          "y_out": Out(layout["y"].shape)})
 
     def elaborate(self, platform):
         p = self.params
