@@ -287,13 +287,14 @@ def sgm_fifth_forwarded(params):
 def sgm_fifth_timing(params, every=DEFAULT_EVERY):
     """The fifth path's offsets: the costs row read as late as lets the recursion (the left
     path's ``left`` clocks) end where S4 is there, or later (and no earlier than its banks'
-    read takes from a clock after the input), S5 registered after both."""
+    read takes from two clocks after the input), S5 registered after both."""
     t = sgm_timing(params, every)
     # The costs row's read is issued that many clocks before its word is there
-    # (``sgm_right._turnaround``), from the column in a register: the column's choice
-    # from the row's direction, straight from the input's tag into the read address, was
-    # census 5x5 SGM's critical path at 1280 x 720, R = 4 (9.38 ns, 5 levels).
+    # (``sgm_right._turnaround``), from the column (slot-aligned at 1) in a register: the
+    # column's choice from the row's direction, straight from the input's tag into the
+    # read address, was census 5x5 SGM's critical path at 1280 x 720, R = 4 (9.38 ns, 5
+    # levels).
     ahead = banked_read_clocks(len(row_banks(params)))
-    costs = max(t.guide, t.latency - t.left - 1, ahead)
+    costs = max(t.guide, t.latency - t.left - 1, ahead + 1)
     right = costs + 1 + t.left
     return FifthTiming(costs, t.latency, right, right + 1)
