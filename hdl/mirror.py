@@ -18,7 +18,7 @@ from amaranth.lib.wiring import Out
 
 from .banks import line_memory
 from .common import pipe, register, tag_layout, y_range
-from .plan_timing import ROW_TURN_LATENCY, reversed_sums_clocks
+from .plan_timing import ROW_TURN_LATENCY, reversed_sums_clocks, reversed_sums_depth
 from .ticks import tick_ports
 
 __all__ = ["reversed_sums", "RowTurn"]
@@ -36,7 +36,7 @@ def reversed_sums(m, params, slots, sums, at, name):
     if slots.rounds == 1:
         return lanes
     rounds, bits = slots.rounds, len(lanes[0])
-    depth = 1 << (2 * rounds - 1).bit_length()
+    depth = reversed_sums_depth(rounds)
     m.submodules[name] = ring = Memory(shape=unsigned(bits * len(lanes)), depth=depth,
                                        init=[])
     write, read = ring.write_port(), ring.read_port(domain="comb")

@@ -16,8 +16,8 @@ from .common import delay_line_rings, lane_groups, tag_layout
 from .cost_term import term_memories, term_word_bits
 from .plan_structure import (cost_banks, cost_rows, output_width, row_banks, store_slices,
                              vertical_bits, window_rows)
-from .plan_timing import core_timing, lr_timing, sgm_delays, sgm_fifth_forwarded, \
-    sgm_left_pairs, sgm_left_shift_store
+from .plan_timing import core_timing, lr_timing, reversed_sums_depth, sgm_delays, \
+    sgm_fifth_forwarded, sgm_left_pairs, sgm_left_shift_store
 from .trees import DEFAULT_EVERY
 
 __all__ = ["MemoryUse", "memories", "memory_bits", "sgm_memories", "built_memories",
@@ -98,7 +98,7 @@ def memories(params, every=DEFAULT_EVERY):
         # hdl/mirror.py: the L/R check's sums reversed (R > 1), and a row of output words
         # (two flags and the output disparity) turned round.
         if rounds > 1 and p.lr_check:
-            result.append(MemoryUse("reversed sums ring", 1, 1 << (2 * rounds - 1).bit_length(),
+            result.append(MemoryUse("reversed sums ring", 1, reversed_sums_depth(rounds),
                                     units * p.aggregated_cost_bits, ASYNC))
         result.append(MemoryUse("output row", 1, p.width, p.output_disparity_bits + 2,
                                 layout=LINES))

@@ -31,7 +31,8 @@ __all__ = ["INPUT_LATENCY", "decision_clocks", "MAX_SKEW_ONE_ROUND", "unit_skews
            "sgm_left_stages",
            "sgm_left_firsts_registered", "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "sgm_left_pairs", "sgm_delays", "FifthTiming", "sgm_fifth_timing",
-           "sgm_fifth_forwarded", "reversed_sums_clocks", "ROW_TURN_LATENCY",
+           "sgm_fifth_forwarded", "reversed_sums_clocks", "reversed_sums_depth",
+           "ROW_TURN_LATENCY",
            "evaluation_latency",
            "LR_STAGE_A", "lr_stage_b", "LRTiming", "lr_timing", "CoreTiming", "core_timing", "latency",
            "cycles_per_frame"]
@@ -259,6 +260,12 @@ def reversed_sums_clocks(params):
     slot's rounds turned round), 0 at R = 1 (its lanes only)."""
     mirrored = params.fifth_path and params.lr_check
     return params.rounds + 1 if mirrored and params.rounds > 1 else 0
+
+
+def reversed_sums_depth(rounds):
+    """Words of :func:`~.mirror.reversed_sums`'s ring at R = ``rounds`` > 1: a power of two
+    holding the 2R clocks that the last round of a slot waits."""
+    return 1 << (2 * rounds - 1).bit_length()
 
 
 #: Clocks from a tick into :class:`~.mirror.RowTurn` to its word: the tick's register
