@@ -153,24 +153,26 @@ def fifth_path(owner, m, four, p2_left):
     f = sgm_fifth_timing(p, owner.every)
     units, width = p.per_round, p.width
     cost_bits, four_bits = p.cost_bits, sgm_summed_cost_bits(p.max_cost, p.p2)
-    # Row starts: the address direction flips, and the rows' y are kept a row back. In
-    # a row's first slot the registers change after its first clock, so the values of the
-    # slot are formed from their old contents there (R clocks alike).
-    starts = slots.first(0) & tag.valid & (tag.x == 0)
+    # Row starts, slot-aligned at 1 (a register: the column's comparison with 0 into the
+    # rows' and the direction's multiplexers was census 5x5 SGM's critical path at 640 x 48,
+    # R = 4, 8.82 ns, 4 levels): the address direction flips, and the rows' y are kept a row
+    # back. In a row's first slot the registers change after its first clock, so the values
+    # of the slot are formed from their old contents there (R clocks alike).
+    starts = register(m, slots.first(0) & tag.valid & (tag.x == 0), 1, "sgm_fifth_starts")
     mirror = Signal(name="sgm_fifth_mirror")
-    mirrored = _direction(mirror, starts)
     # Reset to a row above every frame: before a row has passed, no sum is of a frame
     # row.
     rows = [Signal(tag.y.shape(), name=f"sgm_fifth_row{k}", init=y_range(p)[0])
             for k in range(2)]
+    y = owner._aligned(tag.y, 0, 1, "sgm_fifth_tag_y")
     with m.If(starts):
-        m.d.sync += [mirror.eq(mirrored), rows[1].eq(rows[0]), rows[0].eq(tag.y)]
+        m.d.sync += [mirror.eq(_direction(mirror, starts)), rows[1].eq(rows[0]), rows[0].eq(y)]
     before = Mux(starts, rows[0], rows[1])           # y of the row before this one
     # The column, slot-aligned at 1: x and its mirror image registered, chosen by the
-    # direction (updated by then). The comparison, the direction and the choice in one
-    # clock behind the tag were census 5x5 SGM's critical path at 1280 x 720, R = 4
-    # (8.96 ns, 4 levels).
-    column = Mux(mirror, owner._aligned(width - 1 - tag.x, 0, 1, "sgm_fifth_flipped"),
+    # direction. The comparison, the direction and the choice in one clock behind the tag
+    # were census 5x5 SGM's critical path at 1280 x 720, R = 4 (8.96 ns, 4 levels).
+    column = Mux(_direction(mirror, starts),
+                 owner._aligned(width - 1 - tag.x, 0, 1, "sgm_fifth_flipped"),
                  owner._aligned(tag.x, 0, 1, "sgm_fifth_column_x"))
 
     adaptive = p.p2_adapt != P2_ADAPT_OFF
@@ -184,7 +186,7 @@ def fifth_path(owner, m, four, p2_left):
     at = f.costs + 1
     m.d.comb += [right.first.eq(slots.first(at)), right.round.eq(slots.round(at)),
                  right.tag.x.eq(owner._aligned(tag.x, 0, at, "sgm_fifth_x")),
-                 right.tag.y.eq(owner._aligned(before, 0, at, "sgm_fifth_y")),
+                 right.tag.y.eq(owner._aligned(before, 1, at, "sgm_fifth_y")),
                  right.tag.valid.eq(owner._valid_at(at)), right.tag.live.eq(1)]
     m.d.comb += [right.costs[i].eq(c) for i, c in enumerate(split_lanes(stored, units, cost_bits))]
     if adaptive:
@@ -206,5 +208,5 @@ def fifth_path(owner, m, four, p2_left):
     # S5 of row y leaves in mirrored order while row y + 1 streams in: the back end works
     # on it so (docs/hardware.md "The fifth path"), and the output words are turned round.
     centre = slots.delay(tag, 0, f.latency, "sgm_fifth_centre")
-    y = owner._aligned(before, 0, f.latency, "sgm_fifth_centre_y")
+    y = owner._aligned(before, 1, f.latency, "sgm_fifth_centre_y")
     return total, (centre.x, y, centre.valid, centre.live)
