@@ -107,7 +107,8 @@ class CalculationStage(wiring.Component):
         self.cost_units = [[MatchingCost(params, every) for _ in range(self.rows)]
                            for _ in range(params.per_round)]
         timing = calculation_timing(params, every)
-        self.aggregation = (SemiGlobalAggregation(params, every) if params.is_sgm else
+        self.aggregation = (SemiGlobalAggregation(params, every, slot_base + timing.vertical)
+                            if params.is_sgm else
                             Aggregation(params, every, slot_base + timing.vertical))
         timing = calculation_timing(params, every)
         # Offsets (clocks after the input) of the datapath's steps; see elaborate().

@@ -145,8 +145,8 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
 
     from_costs = False
 
-    def __init__(self, params, every=DEFAULT_EVERY):
-        self.params, self.every = params, every
+    def __init__(self, params, every=DEFAULT_EVERY, slot_base=0):
+        self.params, self.every, self.slot_base = params, every, slot_base
         self.timing = sgm_timing(params, every)
         self.latency = (sgm_fifth_timing(params, every) if params.fifth_path
                         else self.timing).latency
@@ -163,7 +163,8 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
     def elaborate(self, platform):
         p, t = self.params, self.timing
         m = Module()
-        self._slots = slots = SlotClock(m, self.first, self.round, p.rounds, "sgm")
+        self._slots = slots = SlotClock(m, self.first, self.round, p.rounds, "sgm",
+                                        self.slot_base)
         self._valid = {}
         units = p.per_round
         costs = Cat(*(self.costs[i] for i in range(units)))
@@ -347,7 +348,7 @@ class SemiGlobalAggregation(PathOwner, wiring.Component):
             # edge flags registered from the round a clock earlier, per path: the shared
             # round counter through its comparisons into the three paths' multiplexers
             # was census 7x7 SGM's critical path at R = 10 (7.71 ns, 6.71 of it routing).
-            round_ = slots.round(word_at + 1)
+            round_ = slots.phased_round(word_at + 1, 0, f"{name}_round")
             first_round = register(m, round_ == 0, 1, f"{name}_first_round")
             last_round = register(m, round_ == rounds - 1, 1, f"{name}_last_round")
             before = register(m, Mux(first_round, ones, plus[units - 1]), plus_bits,
