@@ -29,8 +29,6 @@ The payloads are :mod:`.stream`'s formats; :mod:`.verilog` wraps the core in the
 top level ``npstereo_core`` with AXI4-Stream port names.
 """
 
-from dataclasses import dataclass
-
 from amaranth.hdl import Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
@@ -50,6 +48,7 @@ from .plan_timing import core_timing, decision_clocks, latency
 from .stream import PixelPair, disparity_word, framed
 from .stream_parts import InputQueue, RegisterSlice
 from .subpixel import SubpixelFit
+from .ticks import TickWords, ticked
 from .trees import DEFAULT_EVERY
 
 __all__ = ["NpStereoCore"]
@@ -455,43 +454,17 @@ class NpStereoCore(wiring.Component):
             m.d.comb += calc.keep.eq(inp.keep)
         return m
 
-
     def _output_words(self, m, lr):
-        """The stage whose words go to the output queue: the L/R check's, turned round
-        with the fifth path, or the 3x3 median of them (each one tick out per tick in, so
+        """The words that go to the output queue: the L/R check's, turned round with the
+        fifth path, then the 3x3 median of them (each stage one tick out per tick in, so
         the credits balance either way)."""
-        words = (lr.retire, lr.produce, lr.valid, lr.disparity_out, lr.x, lr.y)
-        flags = (lr.frame_start, lr.line_end, lr.frame_end)
-        if self.row_turn is not None:
-            m.submodules.row_turn = turn = self.row_turn
-            m.d.comb += [turn.retire.eq(lr.retire), turn.produce.eq(lr.produce),
-                         turn.valid.eq(lr.valid), turn.disparity.eq(lr.disparity_out),
-                         turn.x.eq(lr.x), turn.y.eq(lr.y)]
-            words = (turn.retire_out, turn.produce_out, turn.valid_out, turn.disparity_out,
-                     turn.x_out, turn.y_out)
-            flags = (turn.frame_start, turn.line_end, turn.frame_end)
-        if self.median is None:
-            return _Words(*words[:4], *flags)
-        m.submodules.median = median = self.median
-        retire, produce, valid, disparity, x, y = words
-        m.d.comb += [median.retire.eq(retire), median.produce.eq(produce),
-                     median.valid.eq(valid), median.disparity.eq(disparity),
-                     median.x.eq(x), median.y.eq(y)]
-        return _Words(median.retire_out, median.produce_out, median.valid_out,
-                      median.disparity_out, median.frame_start, median.line_end,
-                      median.frame_end)
-
-
-@dataclass(frozen=True)
-class _Words:
-    """The signals of the last stage that the output queue and the credits take."""
-    retire: Signal
-    produce: Signal
-    valid: Signal
-    disparity: Signal
-    frame_start: Signal
-    line_end: Signal
-    frame_end: Signal
+        words = TickWords(lr.retire, lr.produce, lr.valid, lr.disparity_out, lr.x, lr.y,
+                          lr.frame_start, lr.line_end, lr.frame_end)
+        for name, stage in (("row_turn", self.row_turn), ("median", self.median)):
+            if stage is not None:
+                m.submodules[name] = stage
+                words = ticked(m, stage, words)
+        return words
 
 
 #: Entries of the input queue (a power of two: its pointers wrap by themselves).

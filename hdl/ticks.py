@@ -6,11 +6,14 @@ and gives one per tick, so the core's credits (one per position) balance whateve
 delays.
 """
 
+from dataclasses import dataclass
+
+from amaranth.hdl import Value
 from amaranth.lib.wiring import In, Out
 
 from .common import tag_layout
 
-__all__ = ["tick_ports"]
+__all__ = ["tick_ports", "TickWords", "ticked"]
 
 
 def tick_ports(params, bits):
@@ -25,3 +28,28 @@ def tick_ports(params, bits):
         "disparity_out": Out(bits),
         "frame_start": Out(1), "line_end": Out(1), "frame_end": Out(1),
     }
+
+
+@dataclass(frozen=True)
+class TickWords:
+    """The words a stage gives per tick: what the next tick stage, or the output queue and
+    the credits, take. ``x`` and ``y`` are None where no stage follows that needs them."""
+    retire: Value
+    produce: Value
+    valid: Value
+    disparity: Value
+    x: Value | None
+    y: Value | None
+    frame_start: Value
+    line_end: Value
+    frame_end: Value
+
+
+def ticked(m, stage, words):
+    """``words`` into the tick stage ``stage`` (a submodule of ``m``): its words."""
+    m.d.comb += [stage.retire.eq(words.retire), stage.produce.eq(words.produce),
+                 stage.valid.eq(words.valid), stage.disparity.eq(words.disparity),
+                 stage.x.eq(words.x), stage.y.eq(words.y)]
+    return TickWords(stage.retire_out, stage.produce_out, stage.valid_out, stage.disparity_out,
+                     getattr(stage, "x_out", None), getattr(stage, "y_out", None),
+                     stage.frame_start, stage.line_end, stage.frame_end)
