@@ -268,6 +268,7 @@ class FifthTiming:
     """Offsets of the fifth path (:mod:`.sgm_right`) after the SGM stage's input; each
     row buffer is read at its offset and written a clock later."""
     costs: int          #: the costs row (C and the left path's P2) is read
+    recursion: int      #: the word read, forwarded and registered, enters the recursion
     four: int           #: the four paths' sum S4 (its row is read a clock before)
     right: int          #: L_right of the previous row, mirrored (the recursion's output)
     latency: int        #: S5 of the previous row, mirrored (registered after the addition)
@@ -295,6 +296,10 @@ def sgm_fifth_timing(params, every=DEFAULT_EVERY):
     # read address, was census 5x5 SGM's critical path at 1280 x 720, R = 4 (9.38 ns, 5
     # levels).
     ahead = banked_read_clocks(len(row_banks(params)))
-    costs = max(t.guide, t.latency - t.left - 1, ahead + 1)
-    right = costs + 1 + t.left
-    return FifthTiming(costs, t.latency, right, right + 1)
+    # The word read (``costs`` + 1) is registered behind its forwarding multiplexers: they
+    # fed the recursion's first minimum tree straight from the banks' last register (4 LUTs
+    # and a carry chain, the deepest path of census 5x5 SGM with the fifth path).
+    costs = max(t.guide, t.latency - t.left - 2, ahead + 1)
+    recursion = costs + 2
+    right = recursion + t.left
+    return FifthTiming(costs, recursion, t.latency, right, right + 1)

@@ -180,10 +180,11 @@ def fifth_path(owner, m, four, p2_left):
     costs_word = Cat(*owner._costs[f.costs + 1],
                      owner._aligned(p2_left, t.guide, f.costs + 1, "sgm_fifth_p2")
                      if adaptive else Const(0, 0))
-    stored = _turnaround(owner, m, "sgm_fifth_costs", units * cost_bits + p2_bits, f.costs,
-                         column, costs_word)
+    stored = register(m, _turnaround(owner, m, "sgm_fifth_costs", units * cost_bits + p2_bits,
+                                     f.costs, column, costs_word),
+                      units * cost_bits + p2_bits, "sgm_fifth_costs_read")
     m.submodules.sgm_right = right = RightPathRecursion(p)
-    at = f.costs + 1
+    at = f.recursion
     m.d.comb += [right.first.eq(slots.first(at)), right.round.eq(slots.round(at)),
                  right.tag.x.eq(owner._aligned(tag.x, 0, at, "sgm_fifth_x")),
                  right.tag.y.eq(owner._aligned(before, 1, at, "sgm_fifth_y")),
