@@ -231,10 +231,14 @@ class Median3(wiring.Component):
         """``value`` of W ticks back, a clock after ``tick`` (see the module docstring)."""
         width = self.params.width
         memory = line_memory(m, name, shape, width)
+        # The pointer's next value kept in a register of its own: formed from the pointer
+        # (its increment and wrap) in front of the read address's multiplexer, it was the
+        # recommended configuration's critical path at 1280 x 720 (9.47 ns, 4 levels).
         pointer = Signal(range(width), name=f"{name}_pointer")
-        following = Mux(pointer == width - 1, 0, pointer + 1)
+        following = Signal(range(width), name=f"{name}_following", init=1 % width)
         with m.If(tick):
-            m.d.sync += pointer.eq(following)
+            m.d.sync += [pointer.eq(following),
+                         following.eq(Mux(following == width - 1, 0, following + 1))]
         m.d.comb += [memory.write_addr.eq(pointer), memory.write_data.eq(value),
                      memory.write_en.eq(tick), memory.read_addr.eq(Mux(tick, following, pointer))]
         out = Signal(shape, name=f"{name}_out", reset_less=True)
