@@ -107,10 +107,7 @@ def _turnaround(owner, m, name, width, offset, column, data):
     banks = row_banks(p)
     ahead = banked_read_clocks(len(banks))
     issued = offset + 1 - ahead
-    # A plain shift register (the column holds through the slot): loaded in its slot's
-    # last clock, each latch took a slot pulse tap that the whole stage shares as its
-    # enable, the recommended configuration's critical path at 640 x 480 (7.71 ns of wire).
-    at = pipe(m, column, issued - 1, f"{name}_column")
+    at = owner._aligned(column, 1, issued, f"{name}_column")
     early = at * p.rounds + slots.round(issued) if p.rounds > 1 else at
     address = Signal(range(p.width * p.rounds), name=f"{name}_read_early")
     m.d.comb += address.eq(early)
