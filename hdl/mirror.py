@@ -21,7 +21,20 @@ from .common import pipe, register, tag_layout, y_range
 from .plan_timing import ROW_TURN_LATENCY, reversed_sums_clocks, reversed_sums_depth
 from .ticks import tick_ports
 
-__all__ = ["reversed_sums", "RowTurn"]
+__all__ = ["turning_rows", "reversed_sums", "RowTurn"]
+
+
+def turning_rows(m, params, name, starts, y):
+    """A row buffer's address direction, flipped at every row start (``starts``, a
+    register), and the y of the row before: (direction, y before). The direction is the
+    new one in the start's clock already; the rows' y start from a row above the frame,
+    so that before a row has passed no word is of a frame row."""
+    mirror = Signal(name=f"{name}_mirror")
+    rows = [Signal(y.shape(), name=f"{name}_row{k}", init=y_range(params)[0])
+            for k in range(2)]
+    with m.If(starts):
+        m.d.sync += [mirror.eq(mirror ^ starts), rows[1].eq(rows[0]), rows[0].eq(y)]
+    return mirror ^ starts, Mux(starts, rows[0], rows[1])
 
 
 def reversed_sums(m, params, slots, sums, at, name):
@@ -94,14 +107,7 @@ class RowTurn(wiring.Component):
         x = register(m, self.x, self.x.shape(), "row_turn_x")
         flipped = register(m, p.width - 1 - self.x, self.x.shape(), "row_turn_flipped")
         y = register(m, self.y, self.y.shape(), "row_turn_in_y")
-        mirror = Signal(name="row_turn_mirror")
-        mirrored = mirror ^ starts
-        # The y of this row and of the one before, from a row above the frame.
-        rows = [Signal(self.y.shape(), name=f"row_turn_row{k}", init=y_range(p)[0])
-                for k in range(2)]
-        with m.If(starts):
-            m.d.sync += [mirror.eq(mirrored), rows[1].eq(rows[0]), rows[0].eq(y)]
-        before = Mux(starts, rows[0], rows[1])
+        mirrored, before = turning_rows(m, p, "row_turn", starts, y)
         address = Mux(mirrored, flipped, x)
         written = register(m, address, range(p.width), "row_turn_write_address")
         enable = register(m, retire, 1, "row_turn_write_enable")

@@ -24,7 +24,8 @@ from amaranth.lib.wiring import In, Out
 from ..params import P2_ADAPT_OFF, sgm_summed_cost_bits
 from .banks import banked_memory
 from .common import SlotClock, bits_for, delay_line, pipe, register, split_lanes, \
-    tag_layout, taps, y_range
+    tag_layout, taps
+from .mirror import turning_rows
 from .plan_structure import banked_read_clocks, row_banks
 from .plan_timing import sgm_fifth_forwarded, sgm_fifth_timing, sgm_timing
 from .sgm_left import PathOwner, left_path
@@ -136,11 +137,6 @@ def _forwarded(m, name, address, ahead, enable, data, read_data, distances):
     return value
 
 
-def _direction(mirror, starts):
-    """Whether the row's addresses run right to left: flipped at every row start."""
-    return mirror ^ starts
-
-
 def fifth_path(owner, m, four, p2_left):
     """S5 per lane and its tag at ``sgm_fifth_timing(...).latency`` (module docstring).
 
@@ -158,25 +154,18 @@ def fifth_path(owner, m, four, p2_left):
     # R = 4, 8.82 ns, 4 levels): the address direction flips, and the rows' y are kept a row
     # back. In a row's first slot the registers change after its first clock, so the values
     # of the slot are formed from their old contents there (R clocks alike).
-    # Its slot pulse from a round counter of its own: the stage's shared pulse tap (the
+    # The flag's slot pulse from a round counter of its own: the stage's shared pulse tap (the
     # core's) into it was the recommended configuration's critical path at 1280 x 720
     # (9.85 ns, 2 levels, 101.5 MHz). Any round of the slot would do (the tests pass at
     # every phase): what the flag moves is read in the slot's last clock.
     starts = register(m, slots.private_first(0, 0, "sgm_fifth_round") & tag.valid &
                       (tag.x == 0), 1, "sgm_fifth_starts")
-    mirror = Signal(name="sgm_fifth_mirror")
-    # Reset to a row above every frame: before a row has passed, no sum is of a frame
-    # row.
-    rows = [Signal(tag.y.shape(), name=f"sgm_fifth_row{k}", init=y_range(p)[0])
-            for k in range(2)]
-    y = owner._aligned(tag.y, 0, 1, "sgm_fifth_tag_y")
-    with m.If(starts):
-        m.d.sync += [mirror.eq(_direction(mirror, starts)), rows[1].eq(rows[0]), rows[0].eq(y)]
-    before = Mux(starts, rows[0], rows[1])           # y of the row before this one
+    direction, before = turning_rows(m, p, "sgm_fifth", starts,
+                                     owner._aligned(tag.y, 0, 1, "sgm_fifth_tag_y"))
     # The column, slot-aligned at 1: x and its mirror image registered, chosen by the
     # direction. The comparison, the direction and the choice in one clock behind the tag
     # were census 5x5 SGM's critical path at 1280 x 720, R = 4 (8.96 ns, 4 levels).
-    column = Mux(_direction(mirror, starts),
+    column = Mux(direction,
                  owner._aligned(width - 1 - tag.x, 0, 1, "sgm_fifth_flipped"),
                  owner._aligned(tag.x, 0, 1, "sgm_fifth_column_x"))
 
