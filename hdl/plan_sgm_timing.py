@@ -54,7 +54,7 @@ SGM_LEFT_LATE_CLOCKS = (2, 5)
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
 #: its loop (hdl/sgm_left.py): b(x) of the history or of G(0) registered (<= 1 clock after),
 #: C(p, b) picked (two clocks), its file written, the picked costs read, their sum with P2,
-#: then ref + P2 (the clock before the loop).
+#: then ref + P2 (two clocks before the loop).
 SGM_LEFT_LEAD = 6
 
 
@@ -127,7 +127,7 @@ class SgmTiming:
     loop: int           #: the left path's loop reads Lu(x - 1, .) (ref + P2 is there)
     left_stages: int    #: clocks of the loop's lane update (:func:`sgm_left_stages`)
     left_pairs: bool    #: the loop spans two positions (:func:`sgm_left_pairs`)
-    left_reference: int  #: ref(x) + P2(x) is loaded (there a clock later)
+    left_reference: int  #: ref(x) + P2(x) is loaded (there a clock later; per lane two)
     left_lu: int        #: Lu(x, .) in its register
     left_argmin: int    #: m(x) and argmin Lu(x, .) complete
     left_argmin_split: bool  #: the argmin tree's comparisons and choices in clocks of their own
@@ -154,7 +154,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     """The SGM stage's offsets (see :mod:`.sgm` and :mod:`.sgm_left`).
 
     The left path: the argmin over C(0, .) is complete at T + R (``left_early``); the loop
-    reads at ``loop`` = T + :data:`SGM_LEFT_LEAD` + 1 and has Lu(x, .) in a register
+    reads at ``loop`` = T + :data:`SGM_LEFT_LEAD` + 2 and has Lu(x, .) in a register
     ``left_stages`` later; its argmin at T (2T with the tree split) + R after that.
     Position p registers b(p + k) as early as both G(p + k - K) (``left_argmin`` of a
     position (K - k) slots back) and G(0) allow; the asserts below are the margins of docs/hardware.md ("Semi-global
@@ -167,10 +167,10 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     tree = sgm_tree_clocks(params.per_round)
     stages, pairs = sgm_left_stages(rounds), sgm_left_pairs(rounds)
     early = tree + rounds
-    # ref + P2 in the clock before the loop, two before a loop over two positions (which
-    # compares it with the costs' sum a clock earlier).
+    # ref + P2 two clocks before the loop: copied per group of lanes, then per lane (over
+    # one position), or compared with the costs' sum a clock earlier (over two positions).
     reference = tree + SGM_LEFT_LEAD
-    loop = reference + 1 + pairs
+    loop = reference + 2
     lu = loop + stages
     hand = max(early + 1, reference)
     # b(p + k) registered once G(p + k - K) and G(0) are there; it holds for R clocks, as

@@ -280,6 +280,20 @@ def test_broken_split_file_read_is_caught(monkeypatch, mutation):
     assert_stage_caught(monkeypatch, SPLIT_READ)
 
 
+def test_broken_lane_reference_is_caught(monkeypatch):
+    """Each lane's copy of ref + P2 a clock late: round 0 of a position compares with the
+    previous position's."""
+    real = sgm_left.replica
+
+    def late(m, value, name, shape=None, enable=None, reset_less=False):
+        copy = real(m, value, name, shape, enable, reset_less)
+        if name.startswith("sgm_left_ref_lane"):
+            copy = real(m, copy, f"{name}_late", shape, None, reset_less)
+        return copy
+    monkeypatch.setattr(sgm_left, "replica", late)
+    assert_stage_caught(monkeypatch, SPLIT_READ)
+
+
 def test_broken_top_left_border_is_caught(monkeypatch):
     """Top-left not starting fresh in the first column (it would read the last column of
     the row two above)."""
