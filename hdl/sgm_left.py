@@ -179,11 +179,12 @@ def left_path(owner, m, fresh, p2):
     reference = copies(m, reference_sum(owner, m, column, m0, p2, chosen, sums), bits, units,
                         "sgm_left_ref", slots.first(t.left_reference), _WIDE_LANES_PER_COPY)
     if not t.left_pairs:
-        # ... and then in a copy per lane, loaded a clock later: a copy per four lanes
-        # still reached lanes twelve tiles away (the recommended configuration at 1280 x
-        # 720: into the last lane's comparisons, 8.93 ns, 6.03 of it one wire).
-        reference = [replica(m, r, f"sgm_left_ref_lane{i}", unsigned(bits),
-                             slots.first(t.left_reference + 1), reset_less=True)
+        # ... and then in a copy per lane, a clock behind (it holds the slot's value in the
+        # loop's R clocks): a copy per four lanes still reached lanes twelve tiles away
+        # (the recommended configuration at 1280 x 720: into the last lane's comparisons,
+        # 8.93 ns, 6.03 of it one wire). No enable: a slot pulse tap as the enable of all
+        # the copies was the next placement's critical path (10.52 ns of wire).
+        reference = [register(m, r, bits, f"sgm_left_ref_lane{i}")
                      for i, r in enumerate(reference)]
     update = pair_update if t.left_pairs else _lane_update
     lu = update(owner, m, reference, fresh_at, column)

@@ -283,14 +283,14 @@ def test_broken_split_file_read_is_caught(monkeypatch, mutation):
 def test_broken_lane_reference_is_caught(monkeypatch):
     """Each lane's copy of ref + P2 a clock late: round 0 of a position compares with the
     previous position's."""
-    real = sgm_left.replica
+    real = sgm_left.register
 
-    def late(m, value, name, shape=None, enable=None, reset_less=False):
-        copy = real(m, value, name, shape, enable, reset_less)
+    def late(m, value, bits, name, *args, **kwargs):
+        copy = real(m, value, bits, name, *args, **kwargs)
         if name.startswith("sgm_left_ref_lane"):
-            copy = real(m, copy, f"{name}_late", shape, None, reset_less)
+            copy = real(m, copy, bits, f"{name}_late")
         return copy
-    monkeypatch.setattr(sgm_left, "replica", late)
+    monkeypatch.setattr(sgm_left, "register", late)
     assert_stage_caught(monkeypatch, SPLIT_READ)
 
 
