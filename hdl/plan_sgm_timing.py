@@ -54,7 +54,7 @@ SGM_LEFT_LATE_CLOCKS = (2, 5)
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
 #: its loop (hdl/sgm_left.py): b(x) of the history or of G(0) registered (<= 1 clock after),
 #: C(p, b) picked (two clocks), its file written, the picked costs read, their sum with P2,
-#: then ref + P2 (two clocks before the loop).
+#: then ref + P2 (the clock before the loop).
 SGM_LEFT_LEAD = 6
 
 
@@ -127,7 +127,7 @@ class SgmTiming:
     loop: int           #: the left path's loop reads Lu(x - 1, .) (ref + P2 is there)
     left_stages: int    #: clocks of the loop's lane update (:func:`sgm_left_stages`)
     left_pairs: bool    #: the loop spans two positions (:func:`sgm_left_pairs`)
-    left_reference: int  #: ref(x) + P2(x) is loaded (there a clock later; per lane two)
+    left_reference: int  #: ref(x) + P2(x) is loaded (there a clock later)
     left_lu: int        #: Lu(x, .) in its register
     left_argmin: int    #: m(x) and argmin Lu(x, .) complete
     left_argmin_split: bool  #: the argmin tree's comparisons and choices in clocks of their own
@@ -136,7 +136,6 @@ class SgmTiming:
     left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
     left_sum_clocks: int  #: clocks from reading the picked costs C(x - k, b(x)) to their sum
     left_sum_late: bool  #: C(x - 1, b(x)) joins the sum last (:data:`SGM_LEFT_LATE_CLOCKS`)
-    left_read_split: bool  #: ... and the picked costs' files are read in two clocks, a clock earlier
     left_start_early: bool  #: ref's start, Lu(x - J, b(x)) or m(0), chosen a clock early
     left_start_read: bool  #: ... and Lu(x - J, b(x)) read from its file a clock before that
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
@@ -154,7 +153,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     """The SGM stage's offsets (see :mod:`.sgm` and :mod:`.sgm_left`).
 
     The left path: the argmin over C(0, .) is complete at T + R (``left_early``); the loop
-    reads at ``loop`` = T + :data:`SGM_LEFT_LEAD` + 2 and has Lu(x, .) in a register
+    reads at ``loop`` = T + :data:`SGM_LEFT_LEAD` + 1 and has Lu(x, .) in a register
     ``left_stages`` later; its argmin at T (2T with the tree split) + R after that.
     Position p registers b(p + k) as early as both G(p + k - K) (``left_argmin`` of a
     position (K - k) slots back) and G(0) allow; the asserts below are the margins of docs/hardware.md ("Semi-global
@@ -167,10 +166,10 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     tree = sgm_tree_clocks(params.per_round)
     stages, pairs = sgm_left_stages(rounds), sgm_left_pairs(rounds)
     early = tree + rounds
-    # ref + P2 two clocks before the loop: copied per group of lanes, then per lane (over
-    # one position), or compared with the costs' sum a clock earlier (over two positions).
+    # ref + P2 in the clock before the loop, two before a loop over two positions (which
+    # compares it with the costs' sum a clock earlier).
     reference = tree + SGM_LEFT_LEAD
-    loop = reference + 2
+    loop = reference + 1 + pairs
     lu = loop + stages
     hand = max(early + 1, reference)
     # b(p + k) registered once G(p + k - K) and G(0) are there; it holds for R clocks, as
@@ -212,11 +211,6 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # (P2 joins the others' terms, so it must be there: not with one lane, T = 0.)
     late, rest = SGM_LEFT_LATE_CLOCKS
     sum_late = reference - rest + 1 >= SGM_GUIDE_CLOCKS and margins(picks, rest, late)
-    # ... and each file's multiplexer in two clocks (the entry's low bits within groups,
-    # registered, then the group) where the files are written a clock earlier still: the
-    # entry through the eight-way multiplexer into the term's register was the floor of
-    # the recommended configuration at 1280 x 720 (6.74 ns, 4 levels, 148.3 MHz).
-    read_split = sum_late and margins(picks, rest + 1, late + 1)
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
@@ -255,7 +249,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
-                     history, sum_clocks, sum_late, read_split, start_early, start_read, picks, chain,
+                     history, sum_clocks, sum_late, start_early, start_read, picks, chain,
                      chain_at, chain_history, left, rows,
                      above, rows + tree + rounds, summed)
 

@@ -83,9 +83,8 @@ class PathOwner:
                        self._slots.first(offset - 1))
 
 
-#: Lanes per copy of ref + P2 in the comparisons, and of m(x - 1) and the fresh start in
-#: the output's subtraction.
-_WIDE_LANES_PER_COPY = 4
+#: Lanes per copy of m(x - 1) and of the fresh start in the output's subtraction.
+_OUTPUT_LANES_PER_COPY = 4
 
 
 def _file(m, count, shape, name):
@@ -172,20 +171,9 @@ def left_path(owner, m, fresh, p2):
     chosen = _file(m, steps, bits, "sgm_left_v")
     sums = [_file(m, steps, cost_bits, f"sgm_left_c{k}") for k in range(1, steps)]
 
-    # ref(x) + P2(x), loaded at ``left_reference`` and held through the slot, in a copy
-    # per four lanes: one per eight into the lanes' comparisons was the fifth path's
-    # recursion's critical path in three of four placements of the recommended
-    # configuration at 1280 x 720 (8.35-11.84 ns).
+    # ref(x) + P2(x), loaded at ``left_reference`` and held through the slot.
     reference = copies(m, reference_sum(owner, m, column, m0, p2, chosen, sums), bits, units,
-                        "sgm_left_ref", slots.first(t.left_reference), _WIDE_LANES_PER_COPY)
-    if not t.left_pairs:
-        # ... and then in a copy per lane, a clock behind (it holds the slot's value in the
-        # loop's R clocks): a copy per four lanes still reached lanes twelve tiles away
-        # (the recommended configuration at 1280 x 720: into the last lane's comparisons,
-        # 8.93 ns, 6.03 of it one wire). No enable: a slot pulse tap as the enable of all
-        # the copies was the next placement's critical path (10.52 ns of wire).
-        reference = [register(m, r, bits, f"sgm_left_ref_lane{i}")
-                     for i, r in enumerate(reference)]
+                        "sgm_left_ref", slots.first(t.left_reference))
     update = pair_update if t.left_pairs else _lane_update
     lu = update(owner, m, reference, fresh_at, column)
 
@@ -197,7 +185,7 @@ def left_path(owner, m, fresh, p2):
     # m(x) (and below the fresh start) in a copy per group of four lanes: one register of
     # it into every lane's subtraction was census 7x7 SGM's path at R = 10 (7.19 ns, 5.54
     # of it routing), one per eight lanes still 6.64 ns (4.49).
-    previous_m = copies(m, lowest, bits, units, "sgm_left_m", done, _WIDE_LANES_PER_COPY)
+    previous_m = copies(m, lowest, bits, units, "sgm_left_m", done, _OUTPUT_LANES_PER_COPY)
     # Each entry's write enable decoded a clock ahead into a register of its own: the slot
     # pulse through the decoder into all K entries' enables was census 7x7 SGM's path at
     # R = 10 (6.74 ns, 5.51 of it routing).
@@ -212,7 +200,7 @@ def left_path(owner, m, fresh, p2):
     # L(x, d) = Lu(x, d) - m(x - 1): Lu waits for m(x - 1).
     out = t.left - 1
     fresh_out = copies(m, fresh_at(out - 1), 1, units, "sgm_left_fresh_out",
-                        per=_WIDE_LANES_PER_COPY)
+                        per=_OUTPUT_LANES_PER_COPY)
     assert out - lu_at == sgm_delays(p)["lu"]
     delayed = split_lanes(delay_line(m, Cat(*lu), out - lu_at, "sgm_left_lu_delay"), units, bits)
     return [register(m, (v - Mux(f, 0, mc))[:p.left_cost_bits], p.left_cost_bits,
