@@ -33,7 +33,7 @@ def turning_rows(m, params, name, starts, y):
     rows = [Signal(y.shape(), name=f"{name}_row{k}", init=y_range(params)[0])
             for k in range(2)]
     with m.If(starts):
-        m.d.sync += [mirror.eq(mirror ^ starts), rows[1].eq(rows[0]), rows[0].eq(y)]
+        m.d.sync += [mirror.eq(~mirror), rows[1].eq(rows[0]), rows[0].eq(y)]
     return mirror ^ starts, Mux(starts, rows[0], rows[1])
 
 
