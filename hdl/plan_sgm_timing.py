@@ -10,7 +10,8 @@ from .plan_structure import banked_read_clocks, row_banks
 from .trees import DEFAULT_EVERY, min_tree_latency, register_plan, tree_levels
 
 __all__ = ["SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS", "sgm_row_clocks", "SGM_ABOVE_EVERY",
-           "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS", "sgm_left_pairs", "sgm_left_stages",
+           "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS", "SGM_HISTORY_PAIRS_CLOCKS",
+           "sgm_left_pairs", "sgm_left_stages",
            "sgm_left_firsts_registered",
            "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming", "sgm_timing", "sgm_delays",
            "FifthTiming", "sgm_fifth_timing", "sgm_fifth_forwarded"]
@@ -49,6 +50,14 @@ SGM_ABOVE_EVERY = 1
 #: the others' (read, registered, three levels of additions over J - 1 terms and P2, each
 #: registered, then the last addition).
 SGM_LEFT_LATE_CLOCKS = (2, 5)
+
+
+#: Clocks of the chain's history reader where its margins allow them: the entry's index
+#: copied, then a registered level of 4:1 multiplexers per two of its five bits (K = 32)
+#: (``sgm_left_reference._pick_by_pairs``). An 8:1 first level (three clocks) was census 7x7
+#: SGM's critical path at D = 100, R = 10, 450 x 375 (the index copy into it, 6.78 ns,
+#: 3 LUT levels, 5.55 ns of wire).
+SGM_HISTORY_PAIRS_CLOCKS = 1 + -(-(SGM_TRACK_AGE.bit_length() - 1) // 2)
 
 
 #: Clocks from the left path's minimum tree over C(0, .) (``tree`` + R after the input) to
@@ -227,8 +236,10 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # G(p + J - K) is there for it: the entry's index through the first level into its
     # register was census 5x5 SGM's critical path at 1280 x 720, D = 64, R = 4 (6.75 ns,
     # 4 levels, 148.2 MHz).
-    chain_history = 3 if (chain_at >= 3 and
-                          chain_at - 3 + (age - steps) * rounds >= argmin) else history
+    # With more margin, in SGM_HISTORY_PAIRS_CLOCKS (4) clocks.
+    chain_history = next((clocks for clocks in (SGM_HISTORY_PAIRS_CLOCKS, 3)
+                          if chain_at >= clocks and
+                          chain_at - clocks + (age - steps) * rounds >= argmin), history)
     assert list(picks) == sorted(picks), picks
     # Lu(x - J, b) in its file before position x reads it at ``reference``.
     assert lu + rounds + 1 <= steps * rounds + reference

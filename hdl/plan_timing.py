@@ -16,7 +16,8 @@ from .plan_structure import (bank_choice_levels, cost_plan, cost_rows,
 from .cost_term import term_clocks
 from .median import MEDIAN_LATENCY
 from .plan_sgm_timing import (SGM_ABOVE_EVERY, SGM_GUIDE_CLOCKS,  # noqa: F401
-                              SGM_LEFT_LATE_CLOCKS, SGM_LEFT_LEAD, SGM_ROW_CLOCKS,
+                              SGM_HISTORY_PAIRS_CLOCKS, SGM_LEFT_LATE_CLOCKS,
+                              SGM_LEFT_LEAD, SGM_ROW_CLOCKS,
                               FifthTiming, SgmTiming, sgm_delays,
                               sgm_fifth_forwarded, sgm_fifth_timing,
                               sgm_left_firsts_registered,
@@ -28,6 +29,7 @@ __all__ = ["INPUT_LATENCY", "decision_clocks", "MAX_SKEW_ONE_ROUND", "unit_skews
            "vertical_read", "vertical_clocks", "aggregation_latency", "min_tree_clocks",
            "CalculationTiming", "calculation_timing", "SGM_GUIDE_CLOCKS", "SGM_ROW_CLOCKS",
            "sgm_row_clocks", "SGM_ABOVE_EVERY", "SGM_LEFT_LEAD", "SGM_LEFT_LATE_CLOCKS",
+           "SGM_HISTORY_PAIRS_CLOCKS",
            "sgm_left_stages",
            "sgm_left_firsts_registered", "sgm_left_shift_store", "sgm_tree_clocks", "SgmTiming",
            "sgm_timing", "sgm_left_pairs", "sgm_delays", "FifthTiming", "sgm_fifth_timing",

@@ -8,7 +8,7 @@ what these build; docs/hardware.md "Semi-global aggregation" the structure).
 from amaranth.hdl import Array, Cat, Const, Mux, Signal, unsigned
 
 from ..params import SGM_TRACK_AGE, SGM_TRACK_STEPS
-from .plan_timing import SGM_LEFT_LATE_CLOCKS
+from .plan_timing import SGM_HISTORY_PAIRS_CLOCKS, SGM_LEFT_LATE_CLOCKS
 from .common import bits_for, register, replica
 
 __all__ = ["reference_sum", "pick_references"]
@@ -56,6 +56,30 @@ def _pick(m, values, lane, name, copies=None, registered=False):
     else:
         chosen = Array(_padded(groups, 1 << len(high)))[high]
     return register(m, chosen, width, f"{name}_chosen") if registered else chosen
+
+
+def _pick_by_pairs(m, values, lane, name, copies):
+    """values[lane] through a registered level of 4:1 multiplexers per two bits of
+    ``lane`` (2:1 for a last odd bit), low bits first, a clock each: the first level's
+    groups each select by their own copy in ``copies`` (:func:`_pick_pair_groups`), the
+    higher bits follow in registers of their own."""
+    width, level = len(values[0]), 0
+    selects, high = [copy[:2] for copy in copies], lane[2:]
+    while True:
+        size = 1 << len(selects[0])
+        values = [register(m, Array(_padded(values[k:k + size], size))[select], width,
+                           f"{name}_l{level}_{k}")
+                  for select, k in zip(selects, range(0, len(values), size))]
+        if len(values) == 1:
+            return values[0]
+        high = register(m, high, len(high), f"{name}_l{level}_high")
+        level += 1
+        selects, high = [high[:2]] * -(-len(values) // (1 << len(high[:2]))), high[2:]
+
+
+def _pick_pair_groups(count):
+    """The first level's groups of :func:`_pick_by_pairs` over ``count`` values."""
+    return -(-count // 4)
 
 
 def _padded(values, count):
@@ -227,10 +251,15 @@ def _history_read(owner, m, column, history, b0, k, at, enable=None, ahead=None)
     # selects of all K = 32 entries was census 7x7 SGM's critical path at R = 10
     # (11.38 ns, 3 levels, 87.9 MHz).
     entry_bits = SGM_TRACK_AGE.bit_length() - 1
+    by_pairs = ahead == SGM_HISTORY_PAIRS_CLOCKS
+    groups = _pick_pair_groups(SGM_TRACK_AGE) if by_pairs else \
+        _pick_groups(SGM_TRACK_AGE, entry_bits)
     entries = [replica(m, (x + k)[:entry_bits], f"sgm_left_history_at{k}_{g}",
                        unsigned(entry_bits), reset_less=True)
-               for g in range(_pick_groups(SGM_TRACK_AGE, entry_bits))]
-    if ahead >= 2:
+               for g in range(groups)]
+    if by_pairs:
+        tracked = _pick_by_pairs(m, history, entries[0], f"sgm_left_history{k}", entries)
+    elif ahead >= 2:
         tracked = _pick(m, history, entries[0], f"sgm_left_history{k}", entries,
                         registered=ahead == 3)
     else:

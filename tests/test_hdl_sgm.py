@@ -250,6 +250,27 @@ def test_broken_left_history_is_caught(monkeypatch, params):
     assert_stage_caught(monkeypatch, params)
 
 
+def test_broken_history_pairs_reader_is_caught(monkeypatch):
+    """The chain's history reader in levels of 4:1 (four clocks at R = 1, D = 64): read a
+    clock short (its two-level multiplexer behind the four clocks' index), or with the
+    higher bits of the index not delayed beside the levels."""
+    params = HISTORY_CASES[0]
+    assert plan_timing.sgm_timing(params).left_chain_history == \
+        plan_timing.SGM_HISTORY_PAIRS_CLOCKS == 4
+    check_stage(params, monkeypatch, seed=7)
+    monkeypatch.setattr(sgm_left_reference, "SGM_HISTORY_PAIRS_CLOCKS", 3)
+    assert_stage_caught(monkeypatch, params)
+    monkeypatch.undo()
+    real = sgm_left_reference.register
+
+    def high_undelayed(m, value, shape, name, enable=None):
+        if name.startswith("sgm_left_history") and name.endswith("_high"):
+            return value
+        return real(m, value, shape, name, enable)
+    monkeypatch.setattr(sgm_left_reference, "register", high_undelayed)
+    assert_stage_caught(monkeypatch, params)
+
+
 def test_broken_left_chain_gaps_are_caught(monkeypatch):
     """The history's chain shifted in every slot, not only in those with a position (the
     gaps between positions then shift it too far)."""
