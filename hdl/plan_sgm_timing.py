@@ -145,6 +145,7 @@ class SgmTiming:
     left_history: int   #: clocks of the multiplexer that reads b(p + k) from the history
     left_sum_clocks: int  #: clocks from reading the picked costs C(x - k, b(x)) to their sum
     left_sum_late: bool  #: C(x - 1, b(x)) joins the sum last (:data:`SGM_LEFT_LATE_CLOCKS`)
+    left_read_split: bool  #: ... and the picked costs' files are read in two clocks, a clock earlier
     left_start_early: bool  #: ref's start, Lu(x - J, b(x)) or m(0), chosen a clock early
     left_start_read: bool  #: ... and Lu(x - J, b(x)) read from its file a clock before that
     left_picks: tuple   #: per k = 1 .. J, where position p registers b(p + k)
@@ -220,6 +221,11 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     # (P2 joins the others' terms, so it must be there: not with one lane, T = 0.)
     late, rest = SGM_LEFT_LATE_CLOCKS
     sum_late = reference - rest + 1 >= SGM_GUIDE_CLOCKS and margins(picks, rest, late)
+    # ... and each file's multiplexer in two clocks (the entry's low bits within groups,
+    # registered, then the group) where the files are written a clock earlier still: the
+    # entry through the eight-way multiplexer into the term's register was the floor of
+    # the recommended configuration at 1280 x 720 (6.74 ns, 4 levels, 148.3 MHz).
+    read_split = sum_late and margins(picks, rest + 1, late + 1)
     for k, at in enumerate(picks, 1):
         # G(p + k - K) in the history before position p reads it.
         assert at - history + (age - k) * rounds >= argmin, (k, at)
@@ -260,7 +266,7 @@ def sgm_timing(params, every=DEFAULT_EVERY):
     above = rows + sum(register_plan(len(SGM_ROW_PATHS), SGM_ABOVE_EVERY, 0, True))
     summed = max(left, above) + sum(register_plan(2, every, 0, True))
     return SgmTiming(tree, SGM_GUIDE_CLOCKS, loop, stages, pairs, reference, lu, argmin, split, early, hand,
-                     history, sum_clocks, sum_late, start_early, start_read, picks, chain,
+                     history, sum_clocks, sum_late, read_split, start_early, start_read, picks, chain,
                      chain_at, chain_history, left, rows,
                      above, rows + tree + rounds, summed)
 

@@ -20,13 +20,15 @@ __all__ = ["reference_sum", "pick_references"]
 BITS_PER_INDEX = 3
 
 
-def _read_file(m, entries, index, name):
-    """``entries[index]`` (``index`` a value a clock ahead), the index registered once per
-    :data:`BITS_PER_INDEX` bits of the entries."""
+def _read_file(m, entries, index, name, split=False):
+    """``entries[index]`` (``index`` a value a clock ahead, two with ``split``), the index
+    registered once per :data:`BITS_PER_INDEX` bits of the entries; with ``split`` the
+    multiplexer in two clocks (:func:`_pick`), so the entries are read a clock earlier."""
     width, parts = len(entries[0]), []
     for low in range(0, width, BITS_PER_INDEX):
         at = replica(m, index, f"{name}_{low}", unsigned(len(index)), reset_less=True)
-        parts.append(Array(e[low:low + BITS_PER_INDEX] for e in entries)[at])
+        bits = [e[low:low + BITS_PER_INDEX] for e in entries]
+        parts.append(_pick(m, bits, at, f"{name}_{low}") if split else Array(bits)[at])
     return Cat(*parts)
 
 
@@ -111,16 +113,18 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
             columns[offset] = column(offset)
         return columns[offset]
 
-    def picked_cost(k, entries, at):
+    def picked_cost(k, entries, at, split=False):
         """C(x - k, b(x)) or 0 (x - k < 1), from its file at ``at``. Which entry and
         whether it exists come from the column a clock ahead (a slot-aligned value holds
         for the slot's R clocks, so the registers hold this position's): the subtractions
         and comparisons in front of the files' multiplexers and the additions were census
         7x7 SGM's deepest path (7.1 LUT levels, ECP5); the files' multiplexers and the
-        additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz)."""
+        additions in one clock were its critical path at R = 10 (8.16 ns, 122.5 MHz).
+        ``split``: the file read in two clocks (``timing.left_read_split``)."""
         x = column_at(at - 1)
+        entry = column_at(at - 1 - split) - k
         return Mux(register(m, x > k, 1, f"sgm_left_has{k}"),
-                   _read_file(m, entries, (x - k)[:index], f"sgm_left_entry{k}"), 0)
+                   _read_file(m, entries, entry[:index], f"sgm_left_entry{k}", split), 0)
 
     def level(terms):       # a tree of additions, not a chain
         return [a + b for a, b in zip(terms[::2], terms[1::2])] + terms[len(terms) // 2 * 2:]
@@ -131,14 +135,16 @@ def reference_sum(owner, m, column, m0, p2, chosen, sums):
     if t.left_sum_late:
         late, rest = SGM_LEFT_LATE_CLOCKS
         at = t.left_reference - rest
-        terms = [register(m, picked_cost(k, entries, at), cost_bits, f"sgm_left_term{k}")
+        split = t.left_read_split
+        terms = [register(m, picked_cost(k, entries, at, split), cost_bits,
+                          f"sgm_left_term{k}")
                  for k, entries in enumerate(sums[1:], 2)]
         terms.append(owner._aligned(p2, t.guide, at + 1, "sgm_left_p2"))
         for depth in range(rest - 2):
             terms = registered(level(terms), f"sgm_left_level{depth}_")
         assert len(terms) == 1, "one level of additions per clock"
-        first = register(m, picked_cost(1, sums[0], t.left_reference - late), cost_bits,
-                         "sgm_left_term1")
+        first = register(m, picked_cost(1, sums[0], t.left_reference - late, split),
+                         cost_bits, "sgm_left_term1")
         total = register(m, (terms[0] + first)[:bits], bits, "sgm_left_csum")
     else:
         at = t.left_reference - t.left_sum_clocks

@@ -281,6 +281,26 @@ def test_broken_left_chain_gaps_are_caught(monkeypatch):
     assert_stage_caught(monkeypatch, params)
 
 
+#: R = 4: the picked costs' files read in two clocks (``timing.left_read_split``).
+SPLIT_READ = sgm_params("census", 3, 8, 4, 3, 20, 2, width=35, height=3)
+
+
+@pytest.mark.parametrize("mutation", ["index a clock late", "entry off by one"])
+def test_broken_split_file_read_is_caught(monkeypatch, mutation):
+    """The picked costs' two-clock file read given the column of a clock later, or the
+    neighbouring entry."""
+    assert plan.sgm_timing(SPLIT_READ).left_read_split
+    real = sgm_left_reference._read_file
+
+    def broken(m, entries, index, name, split=False):
+        if split:
+            index = (sgm_left_reference.register(m, index, len(index), f"{name}_late")
+                     if mutation == "index a clock late" else index ^ 1)
+        return real(m, entries, index, name, split)
+    monkeypatch.setattr(sgm_left_reference, "_read_file", broken)
+    assert_stage_caught(monkeypatch, SPLIT_READ)
+
+
 def test_broken_top_left_border_is_caught(monkeypatch):
     """Top-left not starting fresh in the first column (it would read the last column of
     the row two above)."""
