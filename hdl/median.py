@@ -41,8 +41,7 @@ from .banks import line_memory
 from .common import pipe
 from .ticks import tick_ports
 
-__all__ = ["sorting_network", "NETWORK", "network_layers", "LAYER_CLOCKS", "NETWORK_CLOCKS",
-           "MEDIAN_LATENCY", "Median3"]
+__all__ = ["sorting_network", "NETWORK", "network_layers", "MEDIAN_LATENCY", "Median3"]
 
 
 def sorting_network(inputs):
@@ -79,18 +78,10 @@ def network_layers(pairs):
 #: The nine-key network, in layers.
 NETWORK = network_layers(sorting_network(9))
 
-#: Clocks per layer of the network: its comparisons registered beside the keys, then the
-#: exchanges. Both in one clock were the recommended configuration's critical path at
-#: 1280 x 720 (a comparator's carry chain into its multiplexers, 6.95 ns, 143.8 MHz).
-LAYER_CLOCKS = 2
-
-#: Clocks of the network.
-NETWORK_CLOCKS = LAYER_CLOCKS * len(NETWORK)
-
 #: Clocks from a tick at the stage's input to its output word: the entry's register, the
 #: first line buffer's read register and output register, the second's output register,
-#: the window, the network's, the choice.
-MEDIAN_LATENCY = 4 + NETWORK_CLOCKS + 1
+#: the window, one per layer of the network, the choice.
+MEDIAN_LATENCY = 4 + len(NETWORK) + 1
 
 
 def _outside(centre, r, k):
@@ -202,15 +193,13 @@ class Median3(wiring.Component):
                      stage.frame_start.eq(centre.left & centre.top),
                      stage.line_end.eq(centre.right),
                      stage.frame_end.eq(centre.right & centre.bottom)]
-        # The network, :data:`LAYER_CLOCKS` a layer; beside it the count of valid keys
+        # The network, a register after every layer; beside it the count of valid keys
         # and, a clock later, the choice of the sorted index and whether to keep it.
         keys = window
         for n, layer in enumerate(NETWORK):
-            swaps = {(i, j): pipe(m, keys[j] < keys[i], 1, f"median_swap{n}_{i}_{j}")
-                     for i, j in layer}
-            keys = [pipe(m, key, 1, f"median_compared{n}_{i}") for i, key in enumerate(keys)]
             following = list(keys)
-            for (i, j), swap in swaps.items():
+            for i, j in layer:
+                swap = keys[j] < keys[i]
                 following[i], following[j] = Mux(swap, keys[j], keys[i]), \
                     Mux(swap, keys[i], keys[j])
             keys = [pipe(m, value, 1, f"median_sorted{n}_{i}")
@@ -225,9 +214,9 @@ class Median3(wiring.Component):
                                             if _rank_choice(n) == index]).any()
                                        for index in choices)),
                      keep.eq((count != 0) & (centre_valid | (count >= MEDIAN_FILL)))]
-        late = NETWORK_CLOCKS - 2
+        late = len(NETWORK) - 2
         choice, keep = pipe(m, choice, late, "median_choice"), pipe(m, keep, late, "median_keep")
-        stage = pipe(m, stage, NETWORK_CLOCKS, "median_flags", reset=True)
+        stage = pipe(m, stage, len(NETWORK), "median_flags", reset=True)
         chosen = Signal(key_shape, name="median_chosen")
         m.d.comb += chosen.eq(reduce(operator.or_, (Mux(choice[n], keys[index], 0)
                                                     for n, index in enumerate(choices))))
