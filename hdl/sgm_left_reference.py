@@ -60,13 +60,17 @@ def _pick(m, values, lane, name, copies=None, registered=False):
     return register(m, chosen, width, f"{name}_chosen") if registered else chosen
 
 
+#: Index bits of each level of :func:`_pick_by_pairs` (a 4:1 multiplexer).
+_PAIR = 2
+
+
 def _pick_by_pairs(m, values, lane, name, copies):
     """values[lane] through a registered level of 4:1 multiplexers per two bits of
     ``lane`` (2:1 for a last odd bit), low bits first, a clock each: the first level's
     groups each select by their own copy in ``copies`` (:func:`_pick_pair_groups`), the
     higher bits follow in registers of their own."""
     width, level = len(values[0]), 0
-    selects, high = [copy[:2] for copy in copies], lane[2:]
+    selects, high = [copy[:_PAIR] for copy in copies], lane[_PAIR:]
     while True:
         size = 1 << len(selects[0])
         values = [register(m, Array(_padded(values[k:k + size], size))[select], width,
@@ -76,12 +80,13 @@ def _pick_by_pairs(m, values, lane, name, copies):
             return values[0]
         high = register(m, high, len(high), f"{name}_l{level}_high")
         level += 1
-        selects, high = [high[:2]] * -(-len(values) // (1 << len(high[:2]))), high[2:]
+        select = high[:_PAIR]
+        selects, high = [select] * -(-len(values) // (1 << len(select))), high[_PAIR:]
 
 
 def _pick_pair_groups(count):
     """The first level's groups of :func:`_pick_by_pairs` over ``count`` values."""
-    return -(-count // 4)
+    return -(-count // (1 << _PAIR))
 
 
 def _padded(values, count):
