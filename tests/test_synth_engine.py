@@ -162,12 +162,13 @@ def _log_script(log_name, lines, every, then_sleep):
             f"time.sleep({then_sleep})\n"]
 
 
-def _router_script(iterations, failing, then_sleep):
+def _router_script(iterations, failing, then_sleep, overused=lambda i: 0):
     """A process writing router2's iteration lines (nextpnr 0.11's format) to
     nextpnr.log, as a run with timing-driven rip-up does, then sleeping. ``failing`` is
-    the failing arcs of every iteration, or a function of the iteration that gives them."""
-    line = "Info:     iter={} wires=242623 overused=0 overuse=0 tmgfail={} archfail=NA"
-    lines = [line.format(i, failing(i) if callable(failing) else failing)
+    the failing arcs of every iteration, or a function of the iteration that gives them;
+    ``overused`` the wires overused, a function of the iteration."""
+    line = "Info:     iter={} wires=242623 overused={} overuse={} tmgfail={} archfail=NA"
+    lines = [line.format(i, overused(i), overused(i), failing(i) if callable(failing) else failing)
              for i in range(1, iterations + 1)]
     return _log_script("nextpnr.log", lines, 0, then_sleep)
 
@@ -213,6 +214,30 @@ def test_stalled_ripup_is_stopped(tmp_path, monkeypatch):
                          watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
     assert failure == ("timing-driven rip-up abandoned: 19 arcs missed the clock after 400 "
                        "iterations, none fewer than 19 since iteration 41")
+
+
+def _alternating(i):
+    """One wire overused on even iterations from 70 on (the route oscillating)."""
+    return int(i >= 70 and i % 2 == 0)
+
+
+@pytest.mark.parametrize("iterations, expected", [
+    (290, None),
+    (300, "timing-driven rip-up abandoned: 15 arcs missed the clock after 299 iterations, "
+          "none fewer than 15 since iteration 95")])
+def test_stall_counts_legal_routes_only(tmp_path, monkeypatch, iterations, expected):
+    """A route that alternates between a wire overused with no arc failing and a legal
+    route with 15 failing has been stalled since its first legal 15 (iteration 95), not
+    since its first illegal 0: stopped 200 iterations after that, not before."""
+    monkeypatch.setattr(processes, "_WATCH_SECONDS", 0.1)
+    failing = lambda i: 0 if _alternating(i) else (15 if i >= 95 else max(15, 200 - i))
+    # The last iteration is a legal one in both cases (the rule waits for no wire overused).
+    last = iterations if not _alternating(iterations) else iterations - 1
+    failure = processes.run_tool(_router_script(last, failing, 0.5 if expected is None else 60,
+                                                _alternating), tmp_path,
+                                 None, "out.log",
+                                 watch=lambda: nextpnr._hopeless_ripup(tmp_path / "nextpnr.log"))
+    assert failure == expected
 
 
 @pytest.mark.parametrize("finish_seconds, expected", [

@@ -154,8 +154,14 @@ def _hopeless_ripup(log_path, finishes=lambda iteration: False):
             or iteration >= _RIPUP_EARLY_ITERATIONS and failing > _RIPUP_EARLY_FAILING_ARCS):
         return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
                 f"iterations")
-    fewest = min(arcs for _, _, arcs in history)
-    reached = next(i for i, _, arcs in history if arcs == fewest)
+    # Only legal routes count: with a wire overused an arc may take a shorter, illegal path
+    # (the recommended SGM configuration at 720p alternated between one wire overused with
+    # no arc failing and a legal route with 15 failing).
+    legal = [(i, arcs) for i, wires, arcs in history if not wires]
+    if not legal:
+        return None
+    fewest = min(arcs for _, arcs in legal)
+    reached = next(i for i, arcs in legal if arcs == fewest)
     if (failing and not overused and iteration - reached >= _RIPUP_PATIENCE
             and not finishes(iteration)):
         return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
