@@ -168,7 +168,8 @@ def _router_script(iterations, failing, then_sleep, overused=lambda i: 0):
     the failing arcs of every iteration, or a function of the iteration that gives them;
     ``overused`` the wires overused, a function of the iteration."""
     line = "Info:     iter={} wires=242623 overused={} overuse={} tmgfail={} archfail=NA"
-    lines = [line.format(i, overused(i), overused(i), failing(i) if callable(failing) else failing)
+    lines = [line.format(i, overused(i), overused(i),
+                         failing(i) if callable(failing) else failing)
              for i in range(1, iterations + 1)]
     return _log_script("nextpnr.log", lines, 0, then_sleep)
 

@@ -157,13 +157,12 @@ def _hopeless_ripup(log_path, finishes=lambda iteration: False):
     # Only legal routes count: with a wire overused an arc may take a shorter, illegal path
     # (the recommended SGM configuration at 720p alternated between one wire overused with
     # no arc failing and a legal route with 15 failing).
-    legal = [(i, arcs) for i, wires, arcs in history if not wires]
-    if not legal:
+    if not failing or overused:
         return None
+    legal = [(i, arcs) for i, wires, arcs in history if not wires]
     fewest = min(arcs for _, arcs in legal)
     reached = next(i for i, arcs in legal if arcs == fewest)
-    if (failing and not overused and iteration - reached >= _RIPUP_PATIENCE
-            and not finishes(iteration)):
+    if iteration - reached >= _RIPUP_PATIENCE and not finishes(iteration):
         return (f"{_HOPELESS}: {failing:,} arcs missed the clock after {iteration} "
                 f"iterations, none fewer than {fewest:,} since iteration {reached}")
     return None
