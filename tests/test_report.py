@@ -120,6 +120,35 @@ def test_placer_timing_weight_reaches_nextpnr(tmp_path):
     assert default.keys() == weighted.keys() and default != weighted
 
 
+def test_router_alt_weights_reach_nextpnr(tmp_path):
+    """router2's alternate weights route the same placement another way, and the result
+    says so. Broken variants: weights that do not reach nextpnr route it the same way (its
+    router is deterministic: the logs' iterations compare equal); weights given to the
+    placer as well would have to leave its placement as it is."""
+    routes, placements = [], []
+    for alt in (False, True):
+        build = tmp_path / str(alt)
+        result = synthesise(line_buffer_verilog(64, 2), "ecp5", "line_buffer", pnr=True,
+                            freq=400, keep=build, placement=Placement(alt_weights=alt))
+        assert result["status"] == "ok" and result["router_alt_weights"] is alt, result
+        assert ("alternate weights" in result["router"]) is alt
+        log = (build / "nextpnr.log").read_text()
+        routes.append([line for line in log.splitlines() if "iter=" in line])
+        placements.append((build / "placed.json").read_bytes())
+    assert routes[0] and routes[0] != routes[1]
+    assert placements[0] == placements[1]
+
+
+def test_router_alt_weights_are_part_of_the_cache_key():
+    """Given, they are part of the key, and a result's record gives them back."""
+    params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
+    keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d",
+                                   placement=Placement(alt_weights=alt)) for alt in (False, True)}
+    assert len(keys) == 2
+    assert Placement.recorded({"router_alt_weights": True}) == Placement(alt_weights=True)
+    assert Placement.recorded({}) == Placement()
+
+
 def test_placer_timing_weight_is_part_of_the_cache_key():
     params = StereoParams(transform="census", block=3, disparities=8, width=32, height=8)
     keys = {report_cache.cache_key(params, "ecp5", True, 150.0, "d",
@@ -186,7 +215,11 @@ def test_placement_gives_nextpnr_its_arguments():
     assert Placement().arguments() == []
     assert Placement(seed=0, timing_weight=30).arguments() == \
         ["--seed", "0", "--placer-heap-timingweight", "30"]
-    assert Placement(timing_weight=1).fields() == {"seed": None, "placer_timing_weight": 1}
+    assert Placement(timing_weight=1).fields() == {"seed": None, "placer_timing_weight": 1,
+                                                   "router_alt_weights": False}
+    assert Placement(seed=1, alt_weights=True).arguments() == ["--seed", "1"]
+    assert Placement(alt_weights=True).router_arguments() == ["--router2-alt-weights"]
+    assert Placement().router_arguments() == []
 
 
 @pytest.mark.parametrize("choices, message", [
@@ -197,6 +230,7 @@ def test_placement_gives_nextpnr_its_arguments():
                            "not 0"),
     ({"timing_weight": 101}, "Placement timing_weight must be a whole number from 1 to 100, "
                              "not 101"),
+    ({"alt_weights": 1}, "Placement alt_weights must be True or False, not 1"),
 ])
 def test_placement_out_of_range_is_refused(choices, message):
     with pytest.raises(ValueError) as error:
@@ -404,6 +438,10 @@ def test_sweep_tasks_leave_six_input_cores_off_the_ecp5():
      "npstereo: error: --placer-timing-weight must be a whole number from 1 to 100, not 101"),
     (["--camera", "--target", "ecp5", "--pnr", "--placer-timing-weight", "30"],
      "npstereo: error: --placer-timing-weight places one configuration: drop --camera"),
+    (["--width", "32", "--height", "8", "--router-alt-weights"],
+     "npstereo: error: --router-alt-weights is router2's alternate weights: it needs --pnr"),
+    (["--paper", "--target", "ecp5", "--pnr", "--router-alt-weights"],
+     "npstereo: error: --router-alt-weights places one configuration: drop --paper"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, message, capsys, tmp_path):
     json_path = tmp_path / "out.json"

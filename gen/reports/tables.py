@@ -187,7 +187,8 @@ def sweep_markdown(reports):
 
 def _router_note(result):
     """Said beside a critical path when nextpnr routed without timing-driven rip-up, with a
-    placer seed or timing weight given (``--seed``, ``--placer-timing-weight``), or with
+    placer seed or timing weight or router2's alternate weights given (``--seed``,
+    ``--placer-timing-weight``, ``--router-alt-weights``), or with
     the clock on a pin the flow chose
     (:data:`~npstereo.gen.flow.nextpnr.CLOCK_PIN`)."""
     notes = [result.get("ripup_abandoned")]
@@ -195,6 +196,8 @@ def _router_note(result):
         notes.append(f"placer seed {result['seed']}")
     if result.get("placer_timing_weight") is not None:
         notes.append(f"placer timing weight {result['placer_timing_weight']}")
+    if result.get("router_alt_weights"):
+        notes.append("router2's alternate weights")
     if result.get("clock_pin"):
         notes.append(f"clock on pin {result['clock_pin']}: the placer's pad could not "
                      "reach the clock network")
