@@ -74,9 +74,17 @@ def test_verilator_stream(name):
     assert_bit_exact(cosim.run_stream("verilator", params, frames(params), plan))
 
 
+#: Run with traffic only on Icarus, their full plan on Verilator: the box core's full plan
+#: took 58 s under Icarus (a fifth of it traffic) and was the suite's longest test. The
+#: control scenarios still meet four-state simulation (X until reset) in the SGM core's.
+ICARUS_TRAFFIC_ONLY = {"census-5-D8-R2-lr1"}
+
+
 @pytest.mark.parametrize("name", list(CONFIGS))
 def test_icarus_stream(name):
     params, plan = CONFIGS[name]
+    if name in ICARUS_TRAFFIC_ONLY:
+        plan = TRAFFIC_PLAN
     assert_bit_exact(cosim.run_stream("icarus", params, frames(params), plan))
 
 
