@@ -106,7 +106,8 @@ def test_placer_seed_reaches_nextpnr(tmp_path):
     """Another seed is another placement of the same netlist, and the result says which
     seed made it. Broken variant: a seed that does not reach nextpnr gives the default's
     placement (nextpnr is deterministic), and the placements compare equal."""
-    default, seeded = _placements(tmp_path, 50, seed=("seed", (None, 5)))
+    # Seed 2: seed 5's placement took nextpnr 40 s to route (the others, a few seconds).
+    default, seeded = _placements(tmp_path, 50, seed=("seed", (None, 2)))
     assert default.keys() == seeded.keys() and default != seeded
 
 
