@@ -368,6 +368,7 @@ def test_unroutable_clock_is_placed_again_on_the_clock_pin(tmp_path, monkeypatch
     assert "clock.lpf" in attempts[1][1]
     assert "pin 'clk$tr_io' constrained to Bel" in (tmp_path / "place.log").read_text()
     assert "clock on pin G2" in report_tables._router_note(result)
+    assert "router2's alternate weights" in report_tables._router_note(result)
 
 
 def test_other_routing_failures_are_not_placed_again(monkeypatch):
