@@ -75,8 +75,9 @@ def test_verilator_stream(name):
 
 
 #: Run with traffic only on Icarus, their full plan on Verilator: the box core's full plan
-#: took 58 s under Icarus (a fifth of it traffic) and was the suite's longest test. The
-#: control scenarios still meet four-state simulation (X until reset) in the SGM core's.
+#: was the suite's longest test under Icarus (94.7 s beside a placement, 24.4 s with traffic
+#: only). The control scenarios still meet four-state simulation (X until reset) in the SGM
+#: core's.
 ICARUS_TRAFFIC_ONLY = {"census-5-D8-R2-lr1"}
 
 

@@ -123,9 +123,9 @@ def test_placer_timing_weight_reaches_nextpnr(tmp_path):
 
 def test_router_alt_weights_reach_nextpnr(tmp_path):
     """router2's alternate weights route the same placement another way, and the result
-    says so. Broken variants: weights that do not reach nextpnr route it the same way (its
-    router is deterministic: the logs' iterations compare equal); weights given to the
-    placer as well would have to leave its placement as it is."""
+    says so. Broken variant: weights that do not reach nextpnr route it the same way (its
+    router is deterministic: the logs' iterations compare equal). The placements are
+    compared too: the weights are the route's choice alone."""
     routes, placements = [], []
     for alt in (False, True):
         build = tmp_path / str(alt)
